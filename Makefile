@@ -1,0 +1,29 @@
+# Two-command quick start: `make demo` and `make test` each set up .venv on a fresh machine.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+
+.PHONY: demo test verify bench clean
+
+$(STAMP): pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e ".[test]"
+	touch $(STAMP)
+
+demo: $(STAMP)
+	$(PY) -m mlsgalerkin.cli study kernels --quick --out results/demo
+
+test: $(STAMP)
+	$(PY) -m pytest -q -m "not slow"
+
+verify: $(STAMP)
+	$(PY) -m pytest -q -m slow
+	$(PY) -m mlsgalerkin.cli study kernels --out verification/results/kernel_study
+
+bench: $(STAMP)
+	$(PY) benchmarks/run_all.py
+
+clean:
+	rm -rf $(VENV) results .pytest_cache

@@ -1,0 +1,2 @@
+"""mlsgalerkin."""
+__version__ = "0.1.0"
