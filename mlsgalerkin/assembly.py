@@ -1,0 +1,244 @@
+r"""Nodal-integration Galerkin sums over a :class:`~mlsgalerkin.approximation.ShapeTable`.
+
+The table is evaluated at the integration points ``k`` (the particles themselves for nodal
+integration) against the nodes ``i``; pair ``p`` couples point ``k = row(p)`` and node
+``i = indices[p]``. With point volumes ``V_k = M_k / ρ_k`` and masses ``M_k`` (seed digest §4):
+
+=====================  ============================================================  ===========
+quantity               formula                                                        shape
+=====================  ============================================================  ===========
+lumped mass            ``m_i = Σ_k N_i(x_k) M_k``                                     (n_nodes,)
+consistent mass        ``m_ij = Σ_k M_k N_i(x_k) N_j(x_k)``                           sparse
+internal force         ``f_i = −Σ_k σ_k ∇N_i(x_k) V_k``                               (n_nodes, d)
+body force             ``f_i = Σ_k N_i(x_k) b_k V_k``                                 (n_nodes, d)
+traction               ``f_i = Σ_k N_i(x_k) t_k A_k`` (boundary points, areas A_k)   (n_nodes, d)
+velocity gradient      ``L_k = Σ_j v_j ⊗ ∇N_j(x_k)``, ``L[a, b] = ∂v_a/∂x_b``         (n_points, d, d)
+continuity rate        ``dρ_k/dt = −ρ_k tr L_k``                                      (n_points,)
+=====================  ============================================================  ===========
+
+Linear momentum is conserved because ``Σ_i ∇N_i = 0`` (so ``Σ_i f_int,i = 0`` for any stress),
+angular momentum because ``Σ_i x_i ⊗ ∇N_i = I`` with a symmetric stress (linear basis).
+
+Petrov–Galerkin: every function takes the *test* table; pass a different table for the test
+functions than the one used for the trial field (``velocity_gradient``) to leave Bubnov–Galerkin.
+
+The scatters (point → node sums) run in numba with one private accumulator per thread, then
+a reduction, so the parallel loop has no write races. ``*_reference`` functions are the numpy
+versions (``scipy.sparse`` products) used by the agreement tests.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+from numba import prange
+from numpy.typing import ArrayLike, NDArray
+
+from mlsgalerkin.approximation.table import ShapeTable
+
+__all__ = [
+    "lumped_mass",
+    "consistent_mass",
+    "internal_force",
+    "body_force",
+    "traction_force",
+    "velocity_gradient",
+    "continuity_rate",
+    "internal_force_reference",
+    "lumped_mass_reference",
+    "velocity_gradient_reference",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+def _per_point(name: str, a: ArrayLike, table: ShapeTable, trailing: tuple[int, ...] = ()) -> FloatArray:
+    a = np.asarray(a, dtype=np.float64)
+    want = (table.n_points, *trailing)
+    if a.ndim == 0 and not trailing:
+        a = np.full(table.n_points, float(a))
+    if a.shape != want:
+        raise ValueError(f"{name} must have shape {want} (one per integration point), got {a.shape}")
+    if not np.isfinite(a).all():
+        k = int(np.flatnonzero(~np.isfinite(a.reshape(a.shape[0], -1)).all(axis=1))[0])
+        raise ValueError(f"{name} is not finite at integration point {k}")
+    return np.ascontiguousarray(a)
+
+
+def _per_node(name: str, a: ArrayLike, table: ShapeTable, trailing: tuple[int, ...]) -> FloatArray:
+    a = np.asarray(a, dtype=np.float64)
+    want = (table.n_nodes, *trailing)
+    if a.shape != want:
+        raise ValueError(f"{name} must have shape {want} (one per node), got {a.shape}")
+    return np.ascontiguousarray(a)
+
+
+# --------------------------------------------------------------------------------------
+# compiled kernels
+# --------------------------------------------------------------------------------------
+
+
+@numba.njit(cache=True)
+def _thread_blocks(n_rows, n_blocks):
+    edges = np.empty(n_blocks + 1, dtype=np.int64)
+    for b in range(n_blocks + 1):
+        edges[b] = (n_rows * b) // n_blocks
+    return edges
+
+
+@numba.njit(parallel=True, cache=True)
+def _scatter_weighted_values(indptr, indices, values, weight, n_nodes, n_blocks):
+    """``out[i, c] = Σ_k N_i(x_k) weight[k, c]`` (a transposed sparse product)."""
+    n_rows = indptr.shape[0] - 1
+    n_c = weight.shape[1]
+    edges = _thread_blocks(n_rows, n_blocks)
+    slab = np.zeros((n_blocks, n_nodes, n_c))
+    for b in prange(n_blocks):
+        for k in range(edges[b], edges[b + 1]):
+            for p in range(indptr[k], indptr[k + 1]):
+                i = indices[p]
+                v = values[p]
+                for c in range(n_c):
+                    slab[b, i, c] += v * weight[k, c]
+    out = np.zeros((n_nodes, n_c))
+    for i in prange(n_nodes):
+        for b in range(n_blocks):
+            for c in range(n_c):
+                out[i, c] += slab[b, i, c]
+    return out
+
+
+@numba.njit(parallel=True, cache=True)
+def _scatter_stress(indptr, indices, grads, stress_v, n_nodes, n_blocks):
+    """``f[i, a] = −Σ_k Σ_b (σ_k V_k)[a, b] ∂_b N_i(x_k)`` with ``stress_v = σ V``."""
+    n_rows = indptr.shape[0] - 1
+    dim = grads.shape[1]
+    edges = _thread_blocks(n_rows, n_blocks)
+    slab = np.zeros((n_blocks, n_nodes, dim))
+    for blk in prange(n_blocks):
+        for k in range(edges[blk], edges[blk + 1]):
+            for p in range(indptr[k], indptr[k + 1]):
+                i = indices[p]
+                for a in range(dim):
+                    acc = 0.0
+                    for b in range(dim):
+                        acc += stress_v[k, a, b] * grads[p, b]
+                    slab[blk, i, a] -= acc
+    out = np.zeros((n_nodes, dim))
+    for i in prange(n_nodes):
+        for blk in range(n_blocks):
+            for a in range(dim):
+                out[i, a] += slab[blk, i, a]
+    return out
+
+
+@numba.njit(parallel=True, cache=True)
+def _gather_gradient(indptr, indices, grads, v):
+    """``L[k, a, b] = Σ_j v[j, a] ∂_b N_j(x_k)``."""
+    n_rows = indptr.shape[0] - 1
+    dim = grads.shape[1]
+    n_c = v.shape[1]
+    out = np.zeros((n_rows, n_c, dim))
+    for k in prange(n_rows):
+        for p in range(indptr[k], indptr[k + 1]):
+            j = indices[p]
+            for a in range(n_c):
+                va = v[j, a]
+                for b in range(dim):
+                    out[k, a, b] += va * grads[p, b]
+    return out
+
+
+def _n_blocks() -> int:
+    return max(1, numba.get_num_threads())
+
+
+# --------------------------------------------------------------------------------------
+# public API
+# --------------------------------------------------------------------------------------
+
+
+def lumped_mass(table: ShapeTable, masses: ArrayLike) -> FloatArray:
+    """Row-sum (lumped) mass ``m_i = Σ_k N_i(x_k) M_k``, ``(n_nodes,)`` in kg.
+
+    ``masses``: ``(n_points,)`` physical point masses ``M_k`` in kg. Because the shape
+    functions are a partition of unity, ``Σ_i m_i = Σ_k M_k``.
+    """
+    M = _per_point("masses", masses, table)
+    return _scatter_weighted_values(table.indptr, table.indices, table.values, M[:, None], table.n_nodes, _n_blocks())[:, 0]
+
+
+def consistent_mass(table: ShapeTable, masses: ArrayLike):
+    """Consistent mass ``m_ij = Σ_k M_k N_i(x_k) N_j(x_k)`` as a ``scipy.sparse.csr_array``.
+
+    Rows sum to the lumped mass (partition of unity).
+    """
+    from scipy.sparse import csr_array, diags_array
+
+    M = _per_point("masses", masses, table)
+    N = table.value_matrix()
+    return csr_array(N.T @ diags_array(M) @ N)
+
+
+def internal_force(table: ShapeTable, stress: ArrayLike, volumes: ArrayLike) -> FloatArray:
+    r"""Internal nodal force ``f_i = −Σ_k σ_k ∇N_i(x_k) V_k``, ``(n_nodes, dim)`` in N.
+
+    ``stress``: ``(n_points, dim, dim)`` Cauchy stress in Pa; ``volumes``: ``(n_points,)`` in
+    m^dim. ``Σ_i f_i = 0`` for any stress (momentum conservation).
+    """
+    d = table.dim
+    sig = _per_point("stress", stress, table, (d, d))
+    V = _per_point("volumes", volumes, table)
+    return _scatter_stress(table.indptr, table.indices, table.gradients, sig * V[:, None, None], table.n_nodes, _n_blocks())
+
+
+def body_force(table: ShapeTable, body: ArrayLike, volumes: ArrayLike) -> FloatArray:
+    """External body force ``f_i = Σ_k N_i(x_k) b_k V_k``, ``(n_nodes, dim)``.
+
+    ``body``: ``(n_points, dim)`` force per unit volume (e.g. ``ρ g``) in N/m^dim.
+    """
+    b = _per_point("body", body, table, (table.dim,))
+    V = _per_point("volumes", volumes, table)
+    return _scatter_weighted_values(table.indptr, table.indices, table.values, b * V[:, None], table.n_nodes, _n_blocks())
+
+
+def traction_force(boundary_table: ShapeTable, traction: ArrayLike, areas: ArrayLike) -> FloatArray:
+    """Boundary traction force ``f_i = Σ_k N_i(x_k) t_k A_k`` over boundary points ``k``.
+
+    ``boundary_table``: shape functions at the boundary quadrature points; ``traction``:
+    ``(n_points, dim)`` in Pa; ``areas``: ``(n_points,)`` boundary measure in m^(dim-1).
+    """
+    return body_force(boundary_table, traction, areas)
+
+
+def velocity_gradient(table: ShapeTable, velocity: ArrayLike) -> FloatArray:
+    """``L_k = Σ_j v_j ⊗ ∇N_j(x_k)``, ``(n_points, dim, dim)`` with ``L[k, a, b] = ∂v_a/∂x_b``."""
+    v = _per_node("velocity", velocity, table, (table.dim,))
+    return _gather_gradient(table.indptr, table.indices, table.gradients, v)
+
+
+def continuity_rate(table: ShapeTable, velocity: ArrayLike, density: ArrayLike) -> FloatArray:
+    """Collocated continuity ``dρ_k/dt = −ρ_k tr ∇v(x_k)``, ``(n_points,)`` in kg/m^d/s."""
+    rho = _per_point("density", density, table)
+    L = velocity_gradient(table, velocity)
+    return -rho * np.trace(L, axis1=1, axis2=2)
+
+
+# --------------------------------------------------------------------------------------
+# numpy references (tests)
+# --------------------------------------------------------------------------------------
+
+
+def lumped_mass_reference(table: ShapeTable, masses: FloatArray) -> FloatArray:
+    return table.value_matrix().T @ np.asarray(masses, dtype=float)
+
+
+def internal_force_reference(table: ShapeTable, stress: FloatArray, volumes: FloatArray) -> FloatArray:
+    G = table.gradient_matrices()
+    sv = np.asarray(stress) * np.asarray(volumes)[:, None, None]
+    return -np.stack([sum(G[b].T @ sv[:, a, b] for b in range(table.dim)) for a in range(table.dim)], axis=1)
+
+
+def velocity_gradient_reference(table: ShapeTable, velocity: FloatArray) -> FloatArray:
+    G = table.gradient_matrices()
+    return np.stack([G[b] @ velocity for b in range(table.dim)], axis=-1)
