@@ -336,7 +336,7 @@ KERNELS: dict[str, Kernel] = {
                reference="Schoenberg M6; Morris 1997"),
         Kernel("new_quartic", 8, 2.0, (1.0, 15 / (7 * _PI), 315 / (208 * _PI)),
                "C1: d2W/dr2 ≠ 0 at the edge; slightly negative (≥ -0.24 % of f(0)) "
-               "for 1.696 < q < 2", nonnegative=False, reference="Liu, Liu & Lam 2003"),
+               "for 1.6957 < q < 2", nonnegative=False, reference="Liu, Liu & Lam 2003"),
         Kernel("wendland_c2", 9, 2.0, (5 / 8, 7 / (4 * _PI), 21 / (16 * _PI)), "C2",
                reference="Wendland 1995; Dehnen & Aly 2012"),
         Kernel("wendland_c4", 10, 2.0, (3 / 4, 9 / (4 * _PI), 495 / (256 * _PI)), "C4",

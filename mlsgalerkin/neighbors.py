@@ -126,7 +126,7 @@ def _radius_array(name: str, r: ArrayLike, n: int, what: str) -> NDArray[np.floa
     bad = ~(np.isfinite(a) & (a > 0))
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
-        raise ValueError(f"{name} must be positive and finite; entry {k} is {a[k]!r}")
+        raise ValueError(f"{name} must be positive and finite; entry {k} is {float(a[k])}")
     return np.ascontiguousarray(a)
 
 
@@ -214,12 +214,14 @@ def _grid(nodes: np.ndarray, cell_size: float):
     max_cells = _MAX_CELLS_PER_NODE * nodes.shape[0] + 64
     cs = float(cell_size)
     while True:
-        n = np.floor(extent / cs).astype(np.int64) + 1
-        if np.prod(n.astype(float)) <= max_cells:
+        # cell counts in float: extent / cs may exceed int64 (or be inf) for a tiny radius
+        with np.errstate(over="ignore"):
+            n = np.floor(extent / cs) + 1.0
+        if np.prod(n) <= max_cells:
             break
         cs *= 1.25
     ncell = np.ones(3, dtype=np.int64)
-    ncell[:dim] = n
+    ncell[:dim] = n.astype(np.int64)
     origin = np.zeros(3)
     origin[:dim] = lo
     return origin, cs, ncell
@@ -276,12 +278,13 @@ def _cell_range(x, i, reach, origin, cs, ncell, dim, lo, hi):
         lo[k] = 0
         hi[k] = 0
     for k in range(dim):
-        a = int(np.floor((x[i, k] - reach - origin[k]) / cs))
-        b = int(np.floor((x[i, k] + reach - origin[k]) / cs))
+        # clip in float before converting: a huge reach (or far point) would overflow int64
+        a = np.floor((x[i, k] - reach - origin[k]) / cs)
+        b = np.floor((x[i, k] + reach - origin[k]) / cs)
         if b < 0 or a > ncell[k] - 1:
             return False
-        lo[k] = max(a, 0)
-        hi[k] = min(b, ncell[k] - 1)
+        lo[k] = int(max(a, 0.0))
+        hi[k] = int(min(b, float(ncell[k] - 1)))
     return True
 
 

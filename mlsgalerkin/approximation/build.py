@@ -74,7 +74,7 @@ def _positive_array(name: str, a: ArrayLike, n: int) -> NDArray[np.float64]:
     bad = ~(np.isfinite(a) & (a > 0))
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
-        raise ValueError(f"{name} must be positive and finite; node {k} has {a[k]!r}")
+        raise ValueError(f"{name} must be positive and finite; node {k} has {float(a[k])}")
     return np.ascontiguousarray(a)
 
 
