@@ -188,8 +188,9 @@ def brute_force_neighbors(
     for s in range(0, points_a.shape[0], block):
         p = points_a[s : s + block]
         d2 = np.zeros((p.shape[0], nodes_a.shape[0]))
-        for k in range(nodes_a.shape[1]):
-            d2 += (p[:, k, None] - nodes_a[None, :, k]) ** 2
+        with np.errstate(over="ignore"):  # far-apart points: d2 = inf is the right answer
+            for k in range(nodes_a.shape[1]):
+                d2 += (p[:, k, None] - nodes_a[None, :, k]) ** 2
         r2 = (r[None, :] ** 2) if scatter else (r[s : s + block, None] ** 2)
         i, j = np.nonzero(d2 < r2)
         rows.append(i + s)
@@ -246,8 +247,8 @@ def _cell_ids(x, origin, cs, ncell):
         cid = 0
         stride = 1
         for k in range(dim):
-            c = int(np.floor((x[i, k] - origin[k]) / cs))
-            c = min(max(c, 0), ncell[k] - 1)
+            # clamp in float first: a point far outside the grid would overflow int64
+            c = int(min(max(np.floor((x[i, k] - origin[k]) / cs), 0.0), float(ncell[k] - 1)))
             cid += c * stride
             stride *= ncell[k]
         out[i] = cid

@@ -341,3 +341,14 @@ def test_bad_input_same_object(search):
     nodes = _nodes()
     with pytest.raises(ValueError, match=r"radius must be a scalar or have one value per evaluation point \(10\)"):
         search(nodes, nodes, radius=np.ones(3))
+
+
+def test_query_points_at_extreme_coordinates():
+    """Query cells are clamped in floating point: 1e300 must not overflow the cell index."""
+    nodes = np.random.default_rng(3).random((50, 2))
+    pts = np.array([[1e300, -1e300], [0.5, 0.5], [-1e300, 1e300]])
+    a = find_neighbors(pts, nodes, radius=0.3).sorted()
+    b = brute_force_neighbors(pts, nodes, radius=0.3).sorted()
+    np.testing.assert_array_equal(a.indptr, b.indptr)
+    np.testing.assert_array_equal(a.indices, b.indices)
+    assert a.counts[0] == 0 and a.counts[2] == 0 and a.counts[1] > 0
