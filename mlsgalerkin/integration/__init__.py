@@ -1,0 +1,18 @@
+"""Nodal integration rules (DNI, SCNI) and nodal volumes from clipped Voronoi cells."""
+
+from mlsgalerkin.integration.rules import (
+    NodalIntegration,
+    direct_nodal_integration,
+    stabilized_conforming_nodal_integration,
+)
+from mlsgalerkin.integration.voronoi import clipped_voronoi_cells, polygon_area, rectangle, voronoi_volumes
+
+__all__ = [
+    "NodalIntegration",
+    "clipped_voronoi_cells",
+    "direct_nodal_integration",
+    "polygon_area",
+    "rectangle",
+    "stabilized_conforming_nodal_integration",
+    "voronoi_volumes",
+]
