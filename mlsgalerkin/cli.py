@@ -1,4 +1,4 @@
-"""Command line: ``mlsgalerkin kernels | study kernels``.
+"""Command line: ``mlsgalerkin kernels | study kernels | study galerkin``.
 
 Library code logs; this module prints.
 """
@@ -37,6 +37,14 @@ def _cmd_study_kernels(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_study_galerkin(args: argparse.Namespace) -> int:
+    from mlsgalerkin.studies.galerkin_convergence import run_galerkin_study
+
+    result = run_galerkin_study(out=args.out, quick=args.quick, progress=not args.no_progress)
+    print(result.report())
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mlsgalerkin",
@@ -57,6 +65,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default="results/kernel_study", help="output directory")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.set_defaults(func=_cmd_study_kernels)
+    p = studies.add_parser(
+        "galerkin", help="Galerkin convergence study: patch tests, rates, h-sweep, work-precision"
+    )
+    p.add_argument("--quick", action="store_true", help="three-level subset (< 60 s)")
+    p.add_argument("--out", default="results/galerkin_convergence", help="output directory")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    p.set_defaults(func=_cmd_study_galerkin)
     return parser
 
 
