@@ -14,7 +14,8 @@ scaled basis ``P_j = P((x_j - x)/s)``, ``M = Σ_j w_j P_j P_jᵀ``, ``γ = M⁻�
 
 Fallback: the requested order is tried first, then each lower order (the basis is ordered by
 degree, so the lower-order moment matrix is the leading block); an order is accepted when its
-Cholesky factorisation succeeds and ``cond_1(M) <= cond_limit``.
+Cholesky factorisation succeeds with every pivot above ``RELATIVE_PIVOT_TOL`` times its diagonal
+entry, and ``cond_1(M) <= cond_limit``.
 
 Two implementations: :func:`general_shape_kernel` (any order/dimension; optional Gram–Schmidt)
 and :func:`linear2d_shape_kernel` (2D linear, closed-form 3x3 inverse, fused loops).
@@ -32,6 +33,13 @@ from mlsgalerkin.kernels import kernel_f_df
 from mlsgalerkin.polynomials import evaluate_basis
 
 _CHUNK = 64
+
+#: A Cholesky pivot below this fraction of its diagonal entry is rounding noise: the moment
+#: matrix is singular to working precision. (Matrices that pass the default condition limit
+#: 1e8 have relative pivots of at least ~1/(m * 1e8) > 3e-10.) Without this check a
+#: rank-deficient 3x3 matrix can pass, because its adjugate and determinant are both noise and
+#: their ratio looks like a well-conditioned inverse.
+RELATIVE_PIVOT_TOL = 1e-12
 
 
 @numba.njit(cache=True, inline="always")
@@ -63,7 +71,7 @@ def _cholesky(M, mo, L):
         d = M[k, k]
         for l in range(k):
             d -= L[k, l] * L[k, l]
-        if not d > 0.0:
+        if not d > RELATIVE_PIVOT_TOL * M[k, k]:
             return False
         L[k, k] = math.sqrt(d)
         for i in range(k + 1, mo):
@@ -351,7 +359,12 @@ def linear2d_shape_kernel(
         det = m00 * c00 + m01 * c01 + m02 * c02
         linear_ok = False
         cond = np.inf
-        if det > 0.0 and m00 > 0.0 and c22 > 0.0:
+        # Cholesky pivots m00, c22/m00, det/c22, each relative to its diagonal entry
+        if (
+            m00 > 0.0
+            and c22 > RELATIVE_PIVOT_TOL * m00 * m11
+            and det > RELATIVE_PIVOT_TOL * c22 * m22
+        ):
             inv = 1.0 / det
             i00 = c00 * inv
             i01 = c01 * inv
