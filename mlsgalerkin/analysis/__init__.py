@@ -1,5 +1,11 @@
-"""Verification tools: error norms against closed-form solutions."""
+"""Verification tools: error norms against closed-form solutions and convergence rates."""
 
+from mlsgalerkin.analysis.convergence import (
+    ROUNDOFF,
+    PowerLawFit,
+    fit_power_law,
+    observed_orders,
+)
 from mlsgalerkin.analysis.norms import (
     ErrorNorms,
     Quadrature,
@@ -10,6 +16,10 @@ from mlsgalerkin.analysis.norms import (
 )
 
 __all__ = [
+    "ROUNDOFF",
+    "PowerLawFit",
+    "fit_power_law",
+    "observed_orders",
     "ErrorNorms",
     "Quadrature",
     "energy_error",

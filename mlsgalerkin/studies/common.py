@@ -1,0 +1,165 @@
+"""Study-independent helpers for the studies: atomic files, command line, git commit, provenance.
+
+Every study writes its tables, figures and ``summary.md`` through :func:`atomic_write` (a reader
+never sees a half-written file) and records where its numbers came from with
+:func:`provenance`.
+
+>>> print(csv_text(["a", "b"], [["1", "0.5"], ["2", ""]]), end="")
+a,b
+1,0.5
+2,
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Iterable, Sequence
+
+import numpy as np
+
+__all__ = [
+    "atomic_write",
+    "atomic_write_bytes",
+    "atomic_write_text",
+    "command_line",
+    "csv_text",
+    "git_commit",
+    "provenance",
+    "write_csv_rows",
+]
+
+
+def atomic_write(path: str | Path, data: bytes | str) -> Path:
+    """Write ``data`` to ``path`` atomically and return the path.
+
+    The data go to a temporary file in the same directory, which is then moved into place with
+    ``os.replace``; ``str`` data are encoded as UTF-8. The file gets mode ``0o644``. On any error
+    the temporary file is removed and the exception re-raised; ``path`` is then untouched.
+    """
+    path = Path(path)
+    if isinstance(data, str):
+        data = data.encode("utf-8")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+    return path
+
+
+def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
+    """Write bytes atomically (see :func:`atomic_write`)."""
+    return atomic_write(path, bytes(data))
+
+
+def atomic_write_text(path: str | Path, text: str) -> Path:
+    """Write text atomically as UTF-8 (see :func:`atomic_write`)."""
+    return atomic_write(path, str(text))
+
+
+def csv_text(header: Sequence[str], rows: Iterable[Sequence[object]]) -> str:
+    """CSV text (``\\n`` line ends) of a header line and rows of already formatted cells."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(header)
+    for row in rows:
+        w.writerow(row)
+    return buf.getvalue()
+
+
+def write_csv_rows(
+    path: str | Path, header: Sequence[str], rows: Iterable[Sequence[object]]
+) -> Path:
+    """Write :func:`csv_text` of ``header`` and ``rows`` atomically; returns the path."""
+    return atomic_write(path, csv_text(header, rows))
+
+
+def git_commit(cwd: str | Path | None = None) -> str:
+    """Short hash of ``HEAD`` of the repository containing ``cwd`` (default: this package).
+
+    Returns ``"unknown"`` when git is missing, fails, or the tree is not a repository.
+    """
+    where = Path(cwd) if cwd is not None else Path(__file__).resolve().parent
+    try:
+        out = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            timeout=10,
+            cwd=where,
+        )
+        return out.stdout.strip() if out.returncode == 0 and out.stdout.strip() else "unknown"
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+
+
+def command_line() -> str:
+    """The command that started this process, with the package's own entry points spelled out.
+
+    ``.../mlsgalerkin/cli.py`` becomes ``python -m mlsgalerkin.cli``, the console script
+    ``mlsgalerkin``; another ``*.py`` script is shown relative to the working directory.
+    """
+    argv = list(sys.argv) or ["python"]
+    prog = argv[0].replace("\\", "/")
+    if prog.endswith("mlsgalerkin/cli.py"):
+        head = "python -m mlsgalerkin.cli"
+    elif prog.endswith("/mlsgalerkin") or prog == "mlsgalerkin":
+        head = "mlsgalerkin"
+    elif prog.endswith(".py") and "pytest" not in prog:
+        try:
+            prog = os.path.relpath(prog)
+        except ValueError:
+            pass
+        head = f"python {prog}"
+    else:
+        head = Path(prog).name or "python"
+    return " ".join([head] + argv[1:])
+
+
+def provenance(study: str, mode: str | None = None, extra: dict | None = None) -> dict:
+    """Where a run's numbers came from, as a JSON-ready dict.
+
+    Keys, in order: ``study``, ``command`` (:func:`command_line`), ``mode`` (only when given),
+    ``mlsgalerkin_version``, ``git_commit`` (:func:`git_commit`), ``date_utc`` (ISO 8601,
+    seconds), ``machine`` (``platform``, ``processor``, ``cpu_count``), ``python``, ``numpy``,
+    ``numba``; then the items of ``extra`` (which may override any of them).
+    """
+    import numba
+
+    import mlsgalerkin
+
+    prov: dict = {"study": study, "command": command_line()}
+    if mode is not None:
+        prov["mode"] = mode
+    prov.update(
+        {
+            "mlsgalerkin_version": getattr(mlsgalerkin, "__version__", "unknown"),
+            "git_commit": git_commit(),
+            "date_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+            "machine": {
+                "platform": platform.platform(),
+                "processor": platform.machine(),
+                "cpu_count": os.cpu_count(),
+            },
+            "python": platform.python_version(),
+            "numpy": np.__version__,
+            "numba": numba.__version__,
+        }
+    )
+    prov.update(extra or {})
+    return prov
