@@ -188,8 +188,8 @@ def evaluate_shape_functions(
     nodes: NDArray[np.float64],
     h: NDArray[np.float64],
     neighbors: NeighborTable,
-    kernel: Kernel,
-    order: int,
+    kernel: str | Kernel,
+    order: int | str,
     method: str = "mls",
     volumes: NDArray[np.float64] | None = None,
     condition_limit: float = DEFAULT_CONDITION_LIMIT,
@@ -200,8 +200,11 @@ def evaluate_shape_functions(
     """Compiled evaluation on validated arrays (no input checks; for solvers and benchmarks).
 
     ``points (n, dim)``, ``nodes (m, dim)``, ``h (m,)`` and ``volumes (m,)`` must be C-contiguous
-    float64. ``fast=False`` forces the general path where the fused 2D-linear path applies.
+    float64. ``kernel`` is a name or a :class:`Kernel`; ``order`` an integer or a basis name.
+    ``fast=False`` forces the general path where the fused 2D-linear path applies.
     """
+    kernel = get_kernel(kernel)
+    order = basis_order(order)
     dim = points.shape[1]
     n_pairs = neighbors.n_pairs
     values = np.empty(n_pairs)
@@ -253,7 +256,7 @@ def _report_fallbacks(table: ShapeTable, on_fallback: str) -> None:
         f"matrix was singular or had condition number above the limit; see table.fallback, "
         f"table.order and table.condition"
     )
-    logger.warning(message)
+    logger.debug(message)  # the warning below is the user-facing channel (shown once)
     if on_fallback == "raise":
         raise ShapeFunctionFallbackError(message)
     warnings.warn(message, ShapeFunctionFallbackWarning, stacklevel=3)
