@@ -36,6 +36,7 @@ sys.path.insert(0, str(HERE))
 
 import bench_neighbors  # noqa: E402
 import bench_shape_functions  # noqa: E402
+import bench_assembly  # noqa: E402
 
 FLATNESS_GOAL = 1.5
 
@@ -259,9 +260,10 @@ def _flatness(rows: list[dict]) -> list[str]:
 
 
 def write_report(out: Path, prov: dict, nb_rows: list[dict], sf_rows: list[dict],
-                 compile: dict | None, elapsed: float) -> None:
+                 compile: dict | None, elapsed: float, asm_rows: list[dict] | None = None) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    rows = nb_rows + sf_rows
+    asm_rows = asm_rows or []
+    rows = nb_rows + sf_rows + asm_rows
     fields = [
         "benchmark", "case", "dim", "basis", "method", "n_points", "n_pairs", "mean_neighbors",
         "seconds", "repeats", "points_per_s", "ns_per_point", "cost_ratio", "n_fallback",
@@ -309,6 +311,12 @@ def write_report(out: Path, prov: dict, nb_rows: list[dict], sf_rows: list[dict]
            "path)* forces the general path on the same problem to show what the fused one buys.",
            ""]
     md += _table(sf_rows, extra=True)
+    if asm_rows:
+        md += ["", "## Galerkin assembly (internal force + continuity rate)", "",
+               "`assembly.internal_force(table, stress, volume)` plus",
+               "`assembly.continuity_rate(table, velocity, rho)` on a built 2D linear shape table:",
+               "the Galerkin part of one fluid step (issue #3 goal: ≥ 10⁶ points/s).", ""]
+        md += _table(asm_rows, extra=False)
     md += ["", "## Flatness: per-point cost, largest against smallest size", "",
            "The goal is on the per-point cost. In 3D the mean neighbour count grows with the size",
            "(a smaller share of points near the boundary), so part of the per-point growth is more",
@@ -350,6 +358,8 @@ def main(argv: list[str] | None = None) -> int:
     nb_rows = bench_neighbors.run(sizes, repeats=a.repeats)
     print("\n== shape functions (values + gradients, neighbour table given) ==")
     sf_rows = bench_shape_functions.run(sizes, repeats=a.repeats)
+    print("\n== Galerkin assembly (internal force + continuity rate) ==")
+    asm_rows = bench_assembly.run(sizes, repeats=a.repeats)
     if not a.no_retry:
         print("\n== second chance for cases timed while other processes were busy ==")
         remeasure_disturbed(nb_rows + sf_rows, a.repeats)
@@ -361,9 +371,9 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{label}: " + ", ".join(f"{k} {v:.2f} s" for k, v in times.items()))
     prov["load average after"] = " ".join(f"{x:.2f}" for x in os.getloadavg())
     elapsed = time.perf_counter() - t_start
-    write_report(a.out, prov, nb_rows, sf_rows, compile, elapsed)
+    write_report(a.out, prov, nb_rows, sf_rows, compile, elapsed, asm_rows)
     print(f"\nflatness (goal <= {FLATNESS_GOAL}):")
-    print("\n".join(_flatness(nb_rows + sf_rows)[2:]))
+    print("\n".join(_flatness(nb_rows + sf_rows + asm_rows)[2:]))
     print(f"\nwrote {a.out / 'benchmarks.md'} and {a.out / 'benchmarks.csv'} ({elapsed:.0f} s)")
     return 0
 
