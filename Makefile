@@ -21,6 +21,7 @@ test: $(STAMP)
 verify: $(STAMP)
 	$(PY) -m pytest -q -m slow
 	$(PY) -m mlsgalerkin.cli study kernels --out verification/results/kernel_study
+	OPENBLAS_NUM_THREADS=1 $(PY) verification/galerkin_convergence.py --out verification/results/galerkin_convergence
 
 bench: $(STAMP)
 	$(PY) benchmarks/run_all.py

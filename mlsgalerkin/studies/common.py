@@ -90,33 +90,26 @@ def write_csv_rows(
 
 
 def git_commit(cwd: str | Path | None = None) -> str:
-    """Short hash of ``HEAD`` of the repository containing ``cwd`` (default: this package).
-
-    Returns ``"unknown"`` when git is missing, fails, or the tree is not a repository.
-    """
-    where = Path(cwd) if cwd is not None else Path(__file__).resolve().parent
+    """Short commit of the source tree (``+dirty`` with uncommitted changes), or "unknown"."""
+    here = Path(cwd) if cwd is not None else Path(__file__).resolve().parent
     try:
-        out = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"],
-            capture_output=True,
-            text=True,
-            timeout=10,
-            cwd=where,
-        )
-        return out.stdout.strip() if out.returncode == 0 and out.stdout.strip() else "unknown"
+        out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
+                             text=True, timeout=10, cwd=here)
+        if out.returncode != 0 or not out.stdout.strip():
+            return "unknown"
+        commit = out.stdout.strip()
+        st = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                            capture_output=True, text=True, timeout=10, cwd=here)
+        return commit + ("+dirty" if st.returncode == 0 and st.stdout.strip() else "")
     except (OSError, subprocess.SubprocessError):
         return "unknown"
 
 
 def command_line() -> str:
-    """The command that started this process, with the package's own entry points spelled out.
-
-    ``.../mlsgalerkin/cli.py`` becomes ``python -m mlsgalerkin.cli``, the console script
-    ``mlsgalerkin``; another ``*.py`` script is shown relative to the working directory.
-    """
+    """The command that started this process, with the package's entry points spelled out."""
     argv = list(sys.argv) or ["python"]
     prog = argv[0].replace("\\", "/")
-    if prog.endswith("mlsgalerkin/cli.py"):
+    if prog.endswith("mlsgalerkin/cli.py") or prog.endswith("mlsgalerkin/__main__.py"):
         head = "python -m mlsgalerkin.cli"
     elif prog.endswith("/mlsgalerkin") or prog == "mlsgalerkin":
         head = "mlsgalerkin"

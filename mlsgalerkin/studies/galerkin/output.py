@@ -1,0 +1,104 @@
+"""Files of the study: atomic writes, CSV tables and provenance (command, version, commit, machine).
+
+>>> print(csv_text([{"a": 1, "b": 0.5}, {"a": 2, "b": float("nan")}], ["a", "b"]), end="")
+a,b
+1,0.5
+2,nan
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+import platform
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mlsgalerkin.studies.common import atomic_write, command_line, git_commit
+
+__all__ = ["atomic_write", "csv_text", "write_json", "provenance", "command_line", "git_commit"]
+
+
+
+
+def _fmt(v: Any) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, (bool, np.bool_)):
+        return str(bool(v))
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if isinstance(v, (float, np.floating)):
+        v = float(v)
+        if math.isnan(v):
+            return "nan"
+        return f"{v:.6g}"
+    return str(v)
+
+
+def csv_text(rows: list[dict], columns: list[str]) -> str:
+    """CSV with the given columns (missing values empty, floats to 6 significant digits)."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(columns)
+    for r in rows:
+        w.writerow([_fmt(r.get(c)) for c in columns])
+    return buf.getvalue()
+
+
+def _jsonable(v: Any) -> Any:
+    if isinstance(v, dict):
+        return {str(k): _jsonable(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_jsonable(x) for x in v]
+    if isinstance(v, (np.integer,)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        v = float(v)
+        return v if math.isfinite(v) else None
+    if isinstance(v, (np.bool_,)):
+        return bool(v)
+    return v
+
+
+def write_json(path: str | Path, data: dict) -> Path:
+    """Atomic, indented JSON (NaN and inf become null)."""
+    return atomic_write(path, json.dumps(_jsonable(data), indent=2, ensure_ascii=False) + "\n")
+
+
+
+
+
+
+def provenance(study: str, quick: bool, extra: dict | None = None) -> dict:
+    """Command line, versions, git commit, UTC date and machine of this run."""
+    import numba
+    import scipy
+
+    import mlsgalerkin
+
+    prov = {
+        "study": study,
+        "command": command_line(),
+        "mode": "quick" if quick else "default",
+        "mlsgalerkin_version": getattr(mlsgalerkin, "__version__", "unknown"),
+        "git_commit": git_commit(),
+        "date_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "machine": {
+            "platform": platform.platform(),
+            "processor": platform.machine() or "unknown",
+            "cpu_count": os.cpu_count(),
+        },
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "numba": numba.__version__,
+    }
+    prov.update(extra or {})
+    return prov
