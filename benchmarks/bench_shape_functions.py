@@ -8,7 +8,9 @@ evaluation :func:`mlsgalerkin.approximation.evaluate_shape_functions` (values an
 of every pair, per-point condition numbers and fallback orders) — what a solver calls every
 step after its own neighbour update.
 
-Cases: 2D linear MLS (the fused fast path), 2D linear through the general path (to show what
+Cases: 2D linear MLS (the fused fast path; once with fresh output arrays per call and once
+reusing the previous call's pair buffers via ``out=``, as a time-stepping solver does), 2D
+linear through the general path (to show what
 the fused path buys), 2D quadratic, 3D linear, 3D quadratic; sizes about 1e4, 1e5 and 1e6
 points. Warm-up (JIT) on a small problem first; each size is the best of several runs
 (``bench_neighbors.best_of``).
@@ -40,6 +42,7 @@ GOAL_POINTS_PER_S = 4e6
 #: name -> (dim, polynomial order, method, use the fused fast path where it exists)
 CASES: dict[str, tuple[int, int, str, bool]] = {
     "2d-linear": (2, 1, "mls", True),
+    "2d-linear-reuse": (2, 1, "mls", True),
     "2d-linear-general": (2, 1, "mls", False),
     "2d-quadratic": (2, 2, "mls", True),
     "3d-linear": (3, 1, "mls", True),
@@ -51,6 +54,8 @@ _ORDER_NAMES = {0: "constant", 1: "linear", 2: "quadratic"}
 def _case_label(name: str) -> str:
     dim, order, method, fast = CASES[name]
     label = f"{dim}D {_ORDER_NAMES[order]} {method.upper()}"
+    if name.endswith("-reuse"):
+        return label + " (reused buffers)"
     return label + ("" if fast else " (general path)")
 
 
@@ -76,10 +81,18 @@ def run(
             nb = find_neighbors(nodes, nodes, node_radius=kernel.support * h)
             return nodes, h, nb
 
+        reuse = name.endswith("-reuse")
+        previous: list = [None]
+
         def evaluate(nodes, h, nb):
-            return evaluate_shape_functions(
-                nodes, nodes, h, nb, kernel, order, method, fast=fast
+            # "-reuse": a solver's step, which overwrites the pair buffers of its last table
+            table = evaluate_shape_functions(
+                nodes, nodes, h, nb, kernel, order, method, fast=fast,
+                out=previous[0] if reuse else None,
             )
+            if reuse:
+                previous[0] = table
+            return table
 
         evaluate(*setup(2_000))  # JIT compile (or load from the cache)
         for n in sizes:
@@ -102,7 +115,7 @@ def run(
                 "ns_per_point": 1e9 * t / n_pts,
                 "n_fallback": table.n_fallback,
                 "max_condition": float(table.condition.max()),
-                "goal_points_per_s": GOAL_POINTS_PER_S if name == "2d-linear" else float("nan"),
+                "goal_points_per_s": GOAL_POINTS_PER_S if name.startswith("2d-linear") and fast else float("nan"),
             }
             rows.append(row)
             log(

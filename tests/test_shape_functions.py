@@ -376,3 +376,19 @@ def test_rank_deficient_neighbourhoods_never_keep_linear_order(kernel, fast):
         t = evaluate_shape_functions(pts, nodes, h, nb, k, 1, fast=fast)
         assert t.order[0] == 0
         assert np.isfinite(t.gradients).all()
+
+
+def test_reused_buffers_give_identical_tables(rng):
+    """``out=`` reuses an earlier table's pair buffers; results equal a fresh evaluation."""
+    nodes, dx = cloud("jittered", 2, rng)
+    h = np.full(len(nodes), 1.3 * dx)
+    kern = get_kernel("cubic_spline")
+    nb = find_neighbors(nodes, nodes, node_radius=kern.support * h)
+    first = evaluate_shape_functions(nodes, nodes, h, nb, kern, 1)
+    moved = nodes + rng.uniform(-0.05, 0.05, nodes.shape) * dx
+    nb2 = find_neighbors(moved, moved, node_radius=kern.support * h)
+    fresh = evaluate_shape_functions(moved, moved, h, nb2, kern, 1)
+    reused = evaluate_shape_functions(moved, moved, h, nb2, kern, 1, out=first)
+    assert np.shares_memory(reused.values, first.values) or nb2.n_pairs > first.values.shape[0]
+    np.testing.assert_array_equal(reused.values, fresh.values)
+    np.testing.assert_array_equal(reused.gradients, fresh.gradients)

@@ -196,19 +196,32 @@ def evaluate_shape_functions(
     singular_exponent: float = 2.0,
     *,
     fast: bool = True,
+    out: ShapeTable | None = None,
 ) -> ShapeTable:
     """Compiled evaluation on validated arrays (no input checks; for solvers and benchmarks).
 
     ``points (n, dim)``, ``nodes (m, dim)``, ``h (m,)`` and ``volumes (m,)`` must be C-contiguous
     float64. ``kernel`` is a name or a :class:`Kernel`; ``order`` an integer or a basis name.
     ``fast=False`` forces the general path where the fused 2D-linear path applies.
+
+    ``out``: a table from an earlier call whose pair buffers (``values``, ``gradients``) are
+    reused when they have the right size — what a time-stepping solver does every step, saving
+    the first-touch page faults of fresh arrays (~0.1 s per 10⁶ points in 2D). The earlier
+    table's arrays are overwritten: do not keep using it.
     """
     kernel = get_kernel(kernel)
     order = basis_order(order)
     dim = points.shape[1]
     n_pairs = neighbors.n_pairs
-    values = np.empty(n_pairs)
-    grads = np.empty((n_pairs, dim))
+    if out is not None and out.values.shape[0] >= n_pairs and out.gradients.shape[1] == dim:
+        values = out.meta.get("values_buffer", out.values)[:n_pairs]
+        grads = out.meta.get("gradients_buffer", out.gradients)[:n_pairs]
+        buffers = {"values_buffer": out.meta.get("values_buffer", out.values),
+                   "gradients_buffer": out.meta.get("gradients_buffer", out.gradients)}
+    else:
+        values = np.empty(n_pairs)
+        grads = np.empty((n_pairs, dim))
+        buffers = {}
     order_out = np.empty(points.shape[0], dtype=np.int64)
     cond = np.ones(points.shape[0])
     indptr, indices = neighbors.indptr, neighbors.indices
@@ -241,7 +254,7 @@ def evaluate_shape_functions(
     return ShapeTable(
         points=points, indptr=indptr, indices=indices, values=values, gradients=grads,
         n_nodes=nodes.shape[0], requested_order=order, order=order_out.astype(np.int8),
-        condition=cond, method=method, kernel=kernel.name,
+        condition=cond, method=method, kernel=kernel.name, meta=buffers,
     )
 
 
