@@ -72,6 +72,21 @@ def atomic_write_text(path: str | Path, text: str) -> Path:
     return atomic_write(path, str(text))
 
 
+def format_cell(value: object, digits: int = 6, nan: str = "") -> str:
+    """One CSV cell: ``None`` empty, booleans and integers as such, floats to ``digits``
+    significant digits (``nan`` for NaN, ``inf``/``-inf`` spelled out), anything else ``str``."""
+    if value is None:
+        return ""
+    if isinstance(value, (bool, np.bool_)):
+        return str(bool(value))
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        return nan if v != v else f"{v:.{digits}g}"
+    return str(value)
+
+
 def csv_text(header: Sequence[str], rows: Iterable[Sequence[object]]) -> str:
     """CSV text (``\\n`` line ends) of a header line and rows of already formatted cells."""
     buf = io.StringIO()

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from mlsgalerkin.studies.common import atomic_write, command_line, git_commit
+from mlsgalerkin.studies.common import atomic_write, command_line, format_cell, git_commit
 
 __all__ = ["atomic_write", "csv_text", "write_json", "provenance", "command_line", "git_commit"]
 
@@ -28,18 +28,7 @@ __all__ = ["atomic_write", "csv_text", "write_json", "provenance", "command_line
 
 
 def _fmt(v: Any) -> str:
-    if v is None:
-        return ""
-    if isinstance(v, (bool, np.bool_)):
-        return str(bool(v))
-    if isinstance(v, (int, np.integer)):
-        return str(int(v))
-    if isinstance(v, (float, np.floating)):
-        v = float(v)
-        if math.isnan(v):
-            return "nan"
-        return f"{v:.6g}"
-    return str(v)
+    return format_cell(v, digits=6, nan="nan")
 
 
 def csv_text(rows: list[dict], columns: list[str]) -> str:

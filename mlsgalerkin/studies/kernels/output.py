@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import math
 from typing import Iterator
 
-import numpy as np
 
+from mlsgalerkin.studies.common import format_cell
 from mlsgalerkin.studies.common import provenance as common_provenance
 from mlsgalerkin.studies.kernels.config import StudyConfig
 
@@ -31,18 +30,7 @@ _SHORTER = {"wall_s"}
 
 
 def _fmt(v, short: bool | str = False) -> str:
-    if v is None:
-        return ""
-    if isinstance(v, (bool, np.bool_)):
-        return str(bool(v))
-    if isinstance(v, (int, np.integer)):
-        return str(int(v))
-    if isinstance(v, (float, np.floating)):
-        v = float(v)
-        if not math.isfinite(v):
-            return "" if math.isnan(v) else repr(v)
-        return f"{v:.3g}" if short == "3" else f"{v:.4g}" if short else f"{v:.6g}"
-    return str(v)
+    return format_cell(v, digits=3 if short == "3" else 4 if short else 6, nan="")
 
 
 def csv_cells(rows: list[dict], columns: list[str]) -> Iterator[list[str]]:
