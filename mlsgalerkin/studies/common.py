@@ -113,7 +113,11 @@ def git_commit(cwd: str | Path | None = None) -> str:
         if out.returncode != 0 or not out.stdout.strip():
             return "unknown"
         commit = out.stdout.strip()
-        st = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+        # the committed study outputs are not source: regenerating them must not mark the
+        # tree dirty for the next study
+        st = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--",
+                             ":(top)", ":(top,exclude)verification/results",
+                             ":(top,exclude)benchmarks/results"],
                             capture_output=True, text=True, timeout=10, cwd=here)
         return commit + ("+dirty" if st.returncode == 0 and st.stdout.strip() else "")
     except (OSError, subprocess.SubprocessError):
