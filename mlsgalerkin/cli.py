@@ -30,7 +30,7 @@ def _cmd_kernels(args: argparse.Namespace) -> int:
 
 
 def _cmd_study_kernels(args: argparse.Namespace) -> int:
-    from mlsgalerkin.studies.kernel_study import run_kernel_study
+    from mlsgalerkin.studies.kernels import run_kernel_study
 
     result = run_kernel_study(out=args.out, quick=args.quick, progress=not args.no_progress)
     print(result.report())

@@ -11,7 +11,7 @@ import pytest
 
 from mlsgalerkin.kernels import SPH_STUDY_KERNELS, get_kernel
 from mlsgalerkin.neighbors import brute_force_neighbors
-from mlsgalerkin.studies import kernel_study as ks
+from mlsgalerkin.studies import kernels as ks
 
 # ----------------------------------------------------------------------------------------
 # small helpers

@@ -1,6 +1,6 @@
 """Kernel accuracy study (seed digest §6, §9.9) and its MLS/RKPM/Shepard extension.
 
-Thin wrapper around :func:`mlsgalerkin.studies.kernel_study.run_kernel_study`; the same study
+Thin wrapper around :func:`mlsgalerkin.studies.kernels.run_kernel_study`; the same study
 runs as ``mlsgalerkin study kernels``. See ``verification/README.md``.
 
     python verification/kernel_study.py --out verification/results/kernel_study
@@ -13,7 +13,7 @@ import argparse
 import logging
 import sys
 
-from mlsgalerkin.studies.kernel_study import run_kernel_study
+from mlsgalerkin.studies.kernels import run_kernel_study
 
 
 def main(argv: list[str] | None = None) -> int:
