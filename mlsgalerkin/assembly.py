@@ -87,6 +87,18 @@ def _thread_blocks(n_rows, n_blocks):
 
 
 @numba.njit(parallel=True, cache=True)
+def _sum_slabs(slab):
+    """Reduce per-thread accumulators ``(n_blocks, n_nodes, n_c)`` to ``(n_nodes, n_c)``."""
+    n_blocks, n_nodes, n_c = slab.shape
+    out = np.zeros((n_nodes, n_c))
+    for i in prange(n_nodes):
+        for b in range(n_blocks):
+            for c in range(n_c):
+                out[i, c] += slab[b, i, c]
+    return out
+
+
+@numba.njit(parallel=True, cache=True)
 def _scatter_weighted_values(indptr, indices, values, weight, n_nodes, n_blocks):
     """``out[i, c] = Σ_k N_i(x_k) weight[k, c]`` (a transposed sparse product)."""
     n_rows = indptr.shape[0] - 1
@@ -100,12 +112,7 @@ def _scatter_weighted_values(indptr, indices, values, weight, n_nodes, n_blocks)
                 v = values[p]
                 for c in range(n_c):
                     slab[b, i, c] += v * weight[k, c]
-    out = np.zeros((n_nodes, n_c))
-    for i in prange(n_nodes):
-        for b in range(n_blocks):
-            for c in range(n_c):
-                out[i, c] += slab[b, i, c]
-    return out
+    return _sum_slabs(slab)
 
 
 @numba.njit(parallel=True, cache=True)
@@ -124,12 +131,7 @@ def _scatter_stress(indptr, indices, grads, stress_v, n_nodes, n_blocks):
                     for b in range(dim):
                         acc += stress_v[k, a, b] * grads[p, b]
                     slab[blk, i, a] -= acc
-    out = np.zeros((n_nodes, dim))
-    for i in prange(n_nodes):
-        for blk in range(n_blocks):
-            for a in range(dim):
-                out[i, a] += slab[blk, i, a]
-    return out
+    return _sum_slabs(slab)
 
 
 @numba.njit(parallel=True, cache=True)
