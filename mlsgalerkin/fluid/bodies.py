@@ -1,0 +1,217 @@
+r"""Bodies of a fluid scene: :class:`FluidBody` (moving particles, one or more phases) and
+:class:`WallBody` (fixed wall particles), plus lattice builders.
+
+A particle carries a constant physical mass ``M = ρ_init · Δx^d`` (kg/m^(3-d) per unit depth
+in 2D); its volume follows the density, ``V = M/ρ``. Wall particles are integration points of
+the fictitious fluid beyond the wall: their volume stays ``Δx^d`` and their density, pressure
+and velocity are extrapolated from the fluid every step (see :mod:`mlsgalerkin.fluid.walls`).
+
+>>> water = Phase("water", density=1000.0, viscosity=1e-3)
+>>> body = FluidBody.block("water", lower=(0, 0), upper=(0.1, 0.05), spacing=0.01, phases=[water])
+>>> body.n, body.dim
+(50, 2)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from mlsgalerkin.neighbors import as_coordinates
+
+__all__ = ["Phase", "FluidBody", "WallBody", "lattice", "wall_box"]
+
+
+@dataclass(frozen=True)
+class Phase:
+    """A fluid phase: reference density ``density`` (kg/m³) and dynamic ``viscosity`` (Pa s)."""
+
+    name: str
+    density: float
+    viscosity: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.density) and self.density > 0):
+            raise ValueError(f"phase {self.name!r}: density must be positive, got {self.density!r}")
+        if not (np.isfinite(self.viscosity) and self.viscosity >= 0):
+            raise ValueError(f"phase {self.name!r}: viscosity must be >= 0, got {self.viscosity!r}")
+
+
+def lattice(lower: ArrayLike, upper: ArrayLike, spacing: float) -> NDArray[np.float64]:
+    """Cell-centred square lattice filling the box ``[lower, upper]``: ``(n, d)`` positions.
+
+    Points sit at ``lower + (k + 1/2) spacing`` so that each owns a ``spacing^d`` cell inside
+    the box. The number of points per axis is ``round((upper - lower)/spacing)``.
+    """
+    lo = np.asarray(lower, dtype=float)
+    hi = np.asarray(upper, dtype=float)
+    if lo.shape != hi.shape or lo.ndim != 1 or not np.all(hi > lo):
+        raise ValueError(f"lattice: need lower < upper componentwise, got {lo} and {hi}")
+    if not spacing > 0:
+        raise ValueError(f"lattice: spacing must be positive, got {spacing}")
+    counts = np.maximum(np.round((hi - lo) / spacing).astype(int), 1)
+    axes = [lo[a] + (np.arange(counts[a]) + 0.5) * spacing for a in range(lo.size)]
+    grid = np.meshgrid(*axes, indexing="ij")
+    return np.ascontiguousarray(np.stack([g.ravel() for g in grid], axis=1))
+
+
+@dataclass
+class FluidBody:
+    """Fluid particles.
+
+    Parameters
+    ----------
+    name : str
+    positions : (n, d) array, m
+    spacing : float
+        Initial particle spacing ``Δx`` (m); sets the particle volume ``Δx^d`` and ``h``.
+    phases : list of Phase
+    phase : (n,) int array, optional
+        Index into ``phases`` of each particle (default all 0).
+    velocity : (n, d) array or (d,), m/s, optional
+    density : (n,) array, kg/m³, optional
+        Initial density (e.g. hydrostatic); default the phase reference density.
+    """
+
+    name: str
+    positions: NDArray[np.float64]
+    spacing: float
+    phases: list[Phase]
+    phase: NDArray[np.int64] | None = None
+    velocity: NDArray[np.float64] | None = None
+    density: NDArray[np.float64] | None = None
+
+    def __post_init__(self) -> None:
+        self.positions = as_coordinates(f"fluid body {self.name!r} positions", self.positions)
+        n, d = self.positions.shape
+        if d not in (2, 3):
+            raise ValueError(f"fluid body {self.name!r}: positions must be 2D or 3D, got d={d}")
+        if not self.spacing > 0:
+            raise ValueError(f"fluid body {self.name!r}: spacing must be positive")
+        if not self.phases:
+            raise ValueError(f"fluid body {self.name!r}: give at least one Phase")
+        self.phase = np.zeros(n, dtype=np.int64) if self.phase is None else np.asarray(self.phase, dtype=np.int64)
+        if self.phase.shape != (n,) or self.phase.min(initial=0) < 0 or self.phase.max(initial=0) >= len(self.phases):
+            raise ValueError(
+                f"fluid body {self.name!r}: phase must be (n,) integers in [0, {len(self.phases)})"
+            )
+        v = np.zeros((n, d)) if self.velocity is None else np.asarray(self.velocity, dtype=float)
+        self.velocity = np.array(np.broadcast_to(v, (n, d)), dtype=float, order="C")
+        ref = np.array([p.density for p in self.phases])[self.phase]
+        rho = ref if self.density is None else np.asarray(self.density, dtype=float)
+        self.density = np.array(np.broadcast_to(rho, (n,)), dtype=float, order="C")
+        for name, arr in (("velocity", self.velocity), ("density", self.density)):
+            if not np.all(np.isfinite(arr)):
+                raise ValueError(f"fluid body {self.name!r}: {name} has non-finite values")
+        if np.any(self.density <= 0):
+            raise ValueError(f"fluid body {self.name!r}: density must be positive")
+
+    @classmethod
+    def block(
+        cls, name: str, lower: ArrayLike, upper: ArrayLike, spacing: float, phases: list[Phase], **kw
+    ) -> "FluidBody":
+        """A rectangular block of lattice particles (see :func:`lattice`)."""
+        return cls(name, lattice(lower, upper, spacing), spacing, phases, **kw)
+
+    @property
+    def n(self) -> int:
+        return self.positions.shape[0]
+
+    @property
+    def dim(self) -> int:
+        return self.positions.shape[1]
+
+    @property
+    def reference_density(self) -> NDArray[np.float64]:
+        """``(n,)`` reference density ``ρ0`` of each particle's phase."""
+        return np.array([p.density for p in self.phases])[self.phase]
+
+    @property
+    def viscosity(self) -> NDArray[np.float64]:
+        """``(n,)`` dynamic viscosity of each particle's phase (Pa s)."""
+        return np.array([p.viscosity for p in self.phases])[self.phase]
+
+
+@dataclass
+class WallBody:
+    """Fixed wall particles (several layers), prescribed velocity, outward fluid-side normals.
+
+    Parameters
+    ----------
+    name : str
+    positions : (n, d) array, m
+    spacing : float
+        Wall particle spacing (m); each wall particle integrates a ``spacing^d`` volume.
+    normals : (n, d) array, optional
+        Unit normal pointing from the wall into the fluid; required for free-slip walls.
+    velocity : (d,) array, m/s
+        Prescribed wall velocity (the wall itself does not move in this version).
+    reference_density : float
+        Density given to wall particles with no fluid in reach (kg/m³).
+    """
+
+    name: str
+    positions: NDArray[np.float64]
+    spacing: float
+    normals: NDArray[np.float64] | None = None
+    velocity: NDArray[np.float64] | None = None
+    reference_density: float = 1000.0
+
+    def __post_init__(self) -> None:
+        self.positions = as_coordinates(f"wall body {self.name!r} positions", self.positions)
+        n, d = self.positions.shape
+        if not self.spacing > 0:
+            raise ValueError(f"wall body {self.name!r}: spacing must be positive")
+        if self.normals is not None:
+            nrm = np.asarray(self.normals, dtype=float)
+            if nrm.shape != (n, d):
+                raise ValueError(f"wall body {self.name!r}: normals must be ({n}, {d}), got {nrm.shape}")
+            length = np.linalg.norm(nrm, axis=1)
+            if np.any(np.abs(length - 1) > 1e-6):
+                raise ValueError(f"wall body {self.name!r}: normals must be unit vectors")
+            self.normals = np.ascontiguousarray(nrm)
+        v = np.zeros(d) if self.velocity is None else np.asarray(self.velocity, dtype=float)
+        if v.shape != (d,):
+            raise ValueError(f"wall body {self.name!r}: velocity must be a ({d},) vector")
+        self.velocity = v
+
+    @property
+    def n(self) -> int:
+        return self.positions.shape[0]
+
+    @property
+    def dim(self) -> int:
+        return self.positions.shape[1]
+
+
+def wall_box(
+    lower: ArrayLike, upper: ArrayLike, spacing: float, layers: int = 3, *,
+    open_top: bool = True, name: str = "walls", reference_density: float = 1000.0,
+) -> WallBody:
+    """Wall particles around the 2D box ``[lower, upper]`` (the fluid region), ``layers`` deep.
+
+    Particles sit on the lattice of spacing ``spacing`` continued outside the box, so the fluid
+    lattice of :func:`lattice` and the wall lattice line up. The normal of each wall particle
+    points into the box (corner particles get the diagonal). ``open_top`` leaves the top side
+    open. With support ``2h = 2.6 Δx`` three layers cover a full kernel support.
+    """
+    lo = np.asarray(lower, dtype=float)
+    hi = np.asarray(upper, dtype=float)
+    if lo.shape != (2,) or hi.shape != (2,):
+        raise ValueError("wall_box is 2D: lower and upper must be (2,) points")
+    if layers < 1:
+        raise ValueError("wall_box: need at least one layer")
+    t = layers * spacing
+    top = hi[1] if open_top else hi[1] + t
+    pts = lattice(lo - t, np.array([hi[0] + t, top]), spacing)
+    inside = np.all((pts > lo) & (pts < hi), axis=1)
+    if open_top:
+        inside |= (pts[:, 0] > lo[0]) & (pts[:, 0] < hi[0]) & (pts[:, 1] > lo[1])
+    pts = pts[~inside]
+    # inward normal: direction from the particle to the closest point of the box
+    closest = np.clip(pts, lo, hi)
+    nrm = closest - pts
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    return WallBody(name, pts, spacing, normals=nrm, reference_density=reference_density)
