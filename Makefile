@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(PY) -m mlsgalerkin.cli study kernels --quick --out results/demo
+	$(PY) -m mlsgalerkin.cli run gravity_current --dx 0.004 --out results/demo
 
 test: $(STAMP)
 	$(PY) -m pytest -q -m "not slow"
@@ -22,6 +22,7 @@ verify: $(STAMP)
 	$(PY) -m pytest -q -m slow || test $$? -eq 5  # 5: no test is marked slow yet
 	$(PY) -m mlsgalerkin.cli study kernels --out verification/results/kernel_study
 	OPENBLAS_NUM_THREADS=1 $(PY) verification/galerkin_convergence.py --out verification/results/galerkin_convergence
+	$(PY) verification/fluid_validation.py --out verification/results/fluid_validation
 
 bench: $(STAMP)
 	$(PY) benchmarks/run_all.py

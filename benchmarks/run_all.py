@@ -3,12 +3,16 @@
     .venv/bin/python benchmarks/run_all.py          # ~1e4, 1e5, 1e6 points, a few minutes
     .venv/bin/python benchmarks/run_all.py --quick  # 1e4 and 1e5 points, about a minute
 
-(``make bench`` runs the full version.) Three parts:
+(``make bench`` runs the full version.) Parts:
 
 1. neighbour search throughput (``bench_neighbors.py``);
 2. shape-function throughput, values + exact gradients, given the neighbour table
    (``bench_shape_functions.py``);
-3. first-call (JIT) cost: a fresh Python process with an empty numba cache directory
+3. Galerkin assembly throughput (``bench_assembly.py``);
+4. fluid time step on the 2D dam break, particle-steps per second at about 1e4, 4e4 and 1.6e5
+   particles with numba's default thread count and with one thread, split by stage
+   (``bench_fluid_step.py``; ``--quick``: the smallest size only, few steps);
+5. first-call (JIT) cost: a fresh Python process with an empty numba cache directory
    (``NUMBA_CACHE_DIR`` set to a new temporary directory) times the import and the first calls;
    a second process with the same directory times them again with a warm cache.
 
@@ -37,6 +41,7 @@ sys.path.insert(0, str(HERE))
 import bench_neighbors  # noqa: E402
 import bench_shape_functions  # noqa: E402
 import bench_assembly  # noqa: E402
+import bench_fluid_step  # noqa: E402
 
 FLATNESS_GOAL = 1.5
 
@@ -260,14 +265,16 @@ def _flatness(rows: list[dict]) -> list[str]:
 
 
 def write_report(out: Path, prov: dict, nb_rows: list[dict], sf_rows: list[dict],
-                 compile: dict | None, elapsed: float, asm_rows: list[dict] | None = None) -> None:
+                 compile: dict | None, elapsed: float, asm_rows: list[dict] | None = None,
+                 fluid_rows: list[dict] | None = None) -> None:
     out.mkdir(parents=True, exist_ok=True)
     asm_rows = asm_rows or []
-    rows = nb_rows + sf_rows + asm_rows
+    fluid_rows = fluid_rows or []
+    rows = nb_rows + sf_rows + asm_rows + fluid_rows
     fields = [
         "benchmark", "case", "dim", "basis", "method", "n_points", "n_pairs", "mean_neighbors",
         "seconds", "repeats", "points_per_s", "ns_per_point", "cost_ratio", "n_fallback",
-        "max_condition", "goal_points_per_s", "other_load",
+        "max_condition", "goal_points_per_s", "other_load", "threads", "steps",
     ]
     with open(out / "benchmarks.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=fields, extrasaction="ignore")
@@ -317,6 +324,20 @@ def write_report(out: Path, prov: dict, nb_rows: list[dict], sf_rows: list[dict]
                "`assembly.continuity_rate(table, velocity, rho)` on a built 2D linear shape table:",
                "the Galerkin part of one fluid step (issue #3 goal: ≥ 10⁶ points/s).", ""]
         md += _table(asm_rows, extra=False)
+    if fluid_rows:
+        md += ["", "## Fluid time step (2D dam break)", "",
+               "`Simulation(make_scene(dam_break.Parameters(dx=a/ratio)))`, `initialise()`,",
+               "5 warm-up steps, then `sim.step(sim.state.dt_next)` in blocks of a fixed number",
+               "of steps, each block restored from the same snapshot (identical work); best of 3",
+               "blocks. Particles = fluid + wall; *points/s* in the flatness table below means",
+               "particle-steps/s here. Stage split from `sim.timer.seconds`; *untimed* is the",
+               "time-step limit, the skin check and Python between stages. The neighbour list has",
+               "a skin and is rarely rebuilt this early in the collapse (column *neighbour",
+               "builds/step*); the *rebuild every step* column adds one timed `find_neighbors`",
+               "per step instead (`bench_fluid_step.py`). With 2 threads the step is very",
+               "sensitive to other processes (each parallel region waits for a descheduled",
+               "thread): compare its rows only at a low *other load*.", ""]
+        md += bench_fluid_step.markdown(fluid_rows)
     md += ["", "## Flatness: per-point cost, largest against smallest size", "",
            "The goal is on the per-point cost. In 3D the mean neighbour count grows with the size",
            "(a smaller share of points near the boundary), so part of the per-point growth is more",
@@ -346,6 +367,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--no-compile", action="store_true", help="skip the JIT first-call measurement")
     p.add_argument("--no-retry", action="store_true",
                    help="do not re-measure cases disturbed by other processes")
+    p.add_argument("--fluid-sizes", nargs="+", type=float,
+                   help="fluid-step sizes in particles (default 1e4 4e4 1.6e5; "
+                        "--quick: the smallest)")
+    p.add_argument("--no-fluid", action="store_true", help="skip the fluid time-step benchmark")
     p.add_argument("--out", type=Path, default=HERE / "results", help="output directory")
     a = p.parse_args(argv)
     sizes = [int(s) for s in a.sizes] if a.sizes else (
@@ -360,6 +385,15 @@ def main(argv: list[str] | None = None) -> int:
     sf_rows = bench_shape_functions.run(sizes, repeats=a.repeats)
     print("\n== Galerkin assembly (internal force + continuity rate) ==")
     asm_rows = bench_assembly.run(sizes, repeats=a.repeats)
+    fluid_rows: list[dict] = []
+    if not a.no_fluid:
+        print("\n== fluid time step, 2D dam break (particle-steps/s) ==")
+        fluid_argv = ["--repeats", str(a.repeats)]
+        if a.fluid_sizes:
+            fluid_argv += ["--sizes", *map(str, a.fluid_sizes)]
+        if a.quick:
+            fluid_argv.append("--quick")
+        fluid_rows = bench_fluid_step.main(fluid_argv)
     if not a.no_retry:
         print("\n== second chance for cases timed while other processes were busy ==")
         remeasure_disturbed(nb_rows + sf_rows, a.repeats)
@@ -371,9 +405,9 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{label}: " + ", ".join(f"{k} {v:.2f} s" for k, v in times.items()))
     prov["load average after"] = " ".join(f"{x:.2f}" for x in os.getloadavg())
     elapsed = time.perf_counter() - t_start
-    write_report(a.out, prov, nb_rows, sf_rows, compile, elapsed, asm_rows)
+    write_report(a.out, prov, nb_rows, sf_rows, compile, elapsed, asm_rows, fluid_rows)
     print(f"\nflatness (goal <= {FLATNESS_GOAL}):")
-    print("\n".join(_flatness(nb_rows + sf_rows + asm_rows)[2:]))
+    print("\n".join(_flatness(nb_rows + sf_rows + asm_rows + fluid_rows)[2:]))
     print(f"\nwrote {a.out / 'benchmarks.md'} and {a.out / 'benchmarks.csv'} ({elapsed:.0f} s)")
     return 0
 

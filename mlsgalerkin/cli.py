@@ -1,4 +1,4 @@
-"""Command line: ``mlsgalerkin kernels | study kernels | study galerkin``.
+"""Command line: ``mlsgalerkin kernels | run PROBLEM | problems | study kernels | study galerkin``.
 
 Library code logs; this module prints.
 """
@@ -45,6 +45,64 @@ def _cmd_study_galerkin(args: argparse.Namespace) -> int:
     return 0
 
 
+def _parse_sets(items: list[str]) -> dict[str, str]:
+    out = {}
+    for item in items:
+        if "=" not in item:
+            raise SystemExit(f"--set expects NAME=VALUE, got {item!r}")
+        k, v = item.split("=", 1)
+        out[k.strip().replace("-", "_")] = v.strip()
+    return out
+
+
+def _cmd_problems(args: argparse.Namespace) -> int:
+    import dataclasses
+
+    from mlsgalerkin.problems import PROBLEMS, get_problem
+
+    for name in PROBLEMS:
+        mod = get_problem(name)
+        print(f"{name}: {(mod.__doc__ or '').strip().splitlines()[0]}")
+        for f in dataclasses.fields(mod.Parameters):
+            print(f"    {f.name:<20} = {f.default!r}")
+    return 0
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    import json
+    from pathlib import Path
+
+    from mlsgalerkin.problems import run_problem
+    from mlsgalerkin.scene import SceneError
+    from mlsgalerkin.simulation import SimulationDiverged
+
+    overrides = _parse_sets(args.set or [])
+    if args.dx is not None:
+        overrides["dx"] = args.dx
+    if args.t_end is not None:
+        overrides["t_end"] = args.t_end
+    if args.no_gif:
+        overrides["gif"] = "false"
+    out = Path(args.out or f"results/{args.problem}")
+    try:
+        result, results = run_problem(args.problem, overrides, out=out, progress=not args.no_progress,
+                                      restart="latest" if args.restart else None)
+    except (ValueError, SceneError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    except SimulationDiverged as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 3
+    s = result.summary
+    print(f"{args.problem}: {s['particles']['total']} particles ({s['particles']['fluid']} fluid), "
+          f"{s['steps_this_run']} steps to t = {s['t_end_s']:.4g} s in {s['wall_time_s']:.1f} s "
+          f"({s['particle_steps_per_s']:.3g} particle-steps/s)")
+    print(results.get("headline", json.dumps(results)))
+    print(f"output: {out}/ (timeseries.csv, particles.pvd, summary.json"
+          + (", animation.gif" if (out / "animation.gif").exists() else "") + ")")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mlsgalerkin",
@@ -55,6 +113,20 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("kernels", help="list the kernels with support, constants and smoothness")
     p.set_defaults(func=_cmd_kernels)
+
+    p = sub.add_parser("problems", help="list the runnable problems and their parameters")
+    p.set_defaults(func=_cmd_problems)
+
+    p = sub.add_parser("run", help="run a problem: mlsgalerkin run gravity_current --set depth=0.1 --dx 0.002")
+    p.add_argument("problem", help="hydrostatic, dam_break, gravity_current or drop_impact")
+    p.add_argument("--set", action="append", metavar="NAME=VALUE", help="set a problem parameter (repeatable)")
+    p.add_argument("--dx", type=float, help="particle spacing (m)")
+    p.add_argument("--t-end", type=float, help="end time (s)")
+    p.add_argument("--out", help="run directory (default results/PROBLEM)")
+    p.add_argument("--restart", action="store_true", help="continue from the latest checkpoint in --out")
+    p.add_argument("--no-gif", action="store_true", help="skip the animation")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    p.set_defaults(func=_cmd_run)
 
     study = sub.add_parser("study", help="run a verification study")
     studies = study.add_subparsers(dest="study", required=True)

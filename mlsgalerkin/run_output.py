@@ -184,7 +184,7 @@ class RunOutput:
 
         summary = dict(summary)
         try:
-            summary["provenance"] = provenance()
+            summary["provenance"] = provenance(f"run {self.sim.scene.name}")
         except Exception:  # provenance is best effort (no git in an installed package)
             pass
         atomic_write(self.dir / "summary.json", json.dumps(_jsonable(summary), indent=2) + "\n")

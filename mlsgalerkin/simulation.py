@@ -32,6 +32,7 @@ import json
 import logging
 import math
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -39,9 +40,10 @@ from typing import Any
 import numpy as np
 
 from mlsgalerkin.approximation.build import evaluate_shape_functions
-from mlsgalerkin.assembly import _gather_gradient, _n_blocks, _scatter_stress, _scatter_weighted_values
+from mlsgalerkin.assembly import _n_blocks
 from mlsgalerkin.fluid.bodies import FluidBody, WallBody
 from mlsgalerkin.fluid.effects import STAGES, Effect
+from mlsgalerkin.fluid.kernels import internal_force_and_mass, velocity_gradient_divergence
 from mlsgalerkin.fluid.state import CHECKPOINT_ARRAYS, FluidState
 from mlsgalerkin.kernels import get_kernel
 from mlsgalerkin.neighbors import find_neighbors
@@ -155,7 +157,10 @@ class Simulation:
         self.fallback_steps = 0
         self.mass_floored = 0
         self.neighbor_builds = 0
+        self.consistent_mass_unconverged = 0
         self._table = None
+        self._table_volumes: np.ndarray | None = None
+        self._div: np.ndarray | None = None
         self._probe_rows: list[dict] = []
         for e in scene.effects:
             e.setup(s, scene)
@@ -183,18 +188,28 @@ class Simulation:
         s = self.state
         self._neighbors()
         t0 = time.perf_counter()
-        ap = self.scene.approximation
-        volumes = s.M / s.rho if ap.method == "rkpm" else None
-        self._table = evaluate_shape_functions(
-            s.x, s.x, s.h, s.neighbors, self.kernel, self._order, ap.method, volumes, out=self._table,
-        )
-        s.table = self._table
+        self._shape_functions()
         nf = int(np.count_nonzero(self._table.order[: s.n_fluid] < self._order))
         if nf:
             self.fallback_points += nf
             self.fallback_steps += 1
         t0 = self.timer.add("shape_functions", t0)
         self._continuity_rate()
+
+    def _shape_functions(self, volumes: np.ndarray | None = None) -> None:
+        """MLS/RKPM table at the current positions with the current neighbour list (RKPM:
+        with the volumes ``M/ρ`` of now, or the given ones when restoring a checkpoint)."""
+        s = self.state
+        ap = self.scene.approximation
+        if ap.method == "rkpm":
+            self._table_volumes = s.M / s.rho if volumes is None else np.ascontiguousarray(volumes)
+        else:
+            self._table_volumes = None
+        self._table = evaluate_shape_functions(
+            s.x, s.x, s.h, s.neighbors, self.kernel, self._order, ap.method, self._table_volumes,
+            condition_limit=ap.condition_limit, out=self._table,
+        )
+        s.table = self._table
 
     def _continuity_rate(self) -> None:
         """Wall velocities, ``L`` and ``ρ̇ = −ρ tr L`` with the current table and velocities."""
@@ -203,10 +218,10 @@ class Simulation:
         for e in self._stage_effects["kinematics"]:
             e.kinematics(s)
             t0 = self.timer.add(e.name, t0)
-        tab = self._table
-        s.L = _gather_gradient(tab.indptr, tab.indices, tab.gradients, s.v)
+        s.L, self._div = velocity_gradient_divergence(self._table, s.v, s.L, self._div)
         f = s.fluid
-        s.drho[f] = -s.rho[f] * np.trace(s.L[f], axis1=1, axis2=2)
+        np.multiply(s.rho[f], self._div[f], out=s.drho[f])
+        np.negative(s.drho[f], out=s.drho[f])
         self.timer.add("velocity_gradient", t0)
 
     def dynamics(self) -> None:
@@ -226,19 +241,19 @@ class Simulation:
             e.stress(s)
             t0 = self.timer.add(e.name, t0)
         s.volume = s.M / s.rho
-        tab = self._table
-        nb = _n_blocks()
+        stress *= s.volume[:, None, None]
+        force, m = internal_force_and_mass(self._table, stress, s.M, _n_blocks(),
+                                           want_mass=self.scene.mass != "particle")
         if self.scene.mass == "particle":
             m = s.M.copy()
         else:
-            m = _scatter_weighted_values(tab.indptr, tab.indices, tab.values, s.M[:, None], s.n, nb)[:, 0]
             floor = MASS_FLOOR * s.M
             low = m[s.fluid] < floor[s.fluid]
             if low.any():
                 self.mass_floored += int(np.count_nonzero(low))
                 m[: s.n_fluid][low] = floor[: s.n_fluid][low]
         s.mass = m
-        s.force = _scatter_stress(tab.indptr, tab.indices, tab.gradients, stress * s.volume[:, None, None], s.n, nb)
+        s.force = force
         t0 = self.timer.add("internal_force", t0)
         for e in self._stage_effects["force"]:
             e.force(s)
@@ -256,11 +271,21 @@ class Simulation:
 
         from mlsgalerkin.assembly import consistent_mass
 
+        from scipy.sparse import diags_array
+
         s = self.state
         Mc = consistent_mass(self._table, s.M).tocsr()[: s.n_fluid, : s.n_fluid]
+        jacobi = diags_array(1.0 / np.maximum(Mc.diagonal(), 1e-300))
         out = np.empty_like(force)
         for a in range(force.shape[1]):
-            sol, info = cg(Mc, force[:, a], x0=guess[:, a], rtol=1e-10, atol=0.0, maxiter=200)
+            sol, info = cg(Mc, force[:, a], x0=guess[:, a], rtol=1e-10, atol=0.0, maxiter=200, M=jacobi)
+            if info != 0:
+                self.consistent_mass_unconverged += 1
+                if self.consistent_mass_unconverged == 1:
+                    warnings.warn(
+                        "consistent-mass CG did not converge in 200 iterations: the MLS consistent "
+                        "mass matrix is nearly singular (see docs/theory/galerkin_fluid.md); the "
+                        "acceleration is inaccurate — use mass='lumped'", RuntimeWarning, stacklevel=3)
             out[:, a] = sol
         return out
 
@@ -280,7 +305,9 @@ class Simulation:
         dt = self.scene.safety * min(limits)
         if self.scene.dt_max is not None:
             dt = min(dt, self.scene.dt_max)
-        if not math.isfinite(dt):
+        # a NaN limit comes from a non-finite state: leave it to the watchdog (check_health),
+        # which names the particle and the quantity
+        if math.isinf(dt):
             raise ValueError(
                 "no time-step limit: no effect supplies one and the acceleration is zero; set "
                 "scene.dt_max"
@@ -380,6 +407,8 @@ class Simulation:
         arrays = {k: getattr(s, k).copy() for k in CHECKPOINT_ARRAYS}
         for k, v in s.extra.items():
             arrays[f"extra__{k}"] = np.asarray(v).copy()
+        if self._table_volumes is not None:  # RKPM: the volumes of the current table
+            arrays["table_volumes"] = self._table_volumes.copy()
         meta = {
             "scene": self.scene.name, "t": s.t, "step": s.step, "dt_next": s.dt_next, "n": s.n,
             "n_fluid": s.n_fluid, "effects": {e.name: e.state_dict() for e in self.scene.effects},
@@ -411,6 +440,9 @@ class Simulation:
         # rebuild the neighbour list from the reference positions it was built from, so the
         # skin logic and the pair order are exactly those of the uninterrupted run
         s.neighbors = find_neighbors(s.x_ref, s.x_ref, radius=self.search_radius)
+        # the first kick of the next step forms L with the table of the current positions
+        # (kdk); without it a restarted run had no table at all
+        self._shape_functions(arrays.get("table_volumes"))
         self._initialised = True
 
     # ------------------------------------------------------------------ run
@@ -450,6 +482,8 @@ class Simulation:
                 diag = self.check_health()
                 if diag is not None:
                     path = output.write_checkpoint(*last_good, name="last_good") if output else None
+                    if output is not None:  # keep the time series up to the failure for diagnosis
+                        output.ts.flush()
                     msg = (
                         f"run diverged at step {diag['step']} (t = {diag['time']:.6g} s): particle "
                         f"{diag['particle']} of body {diag['body']!r} at {np.round(diag['position'], 6).tolist()} "
@@ -499,6 +533,7 @@ class Simulation:
                 "shape_function_fallback_points": self.fallback_points,
                 "steps_with_fallback": self.fallback_steps,
                 "lumped_mass_floored": self.mass_floored,
+                "consistent_mass_unconverged_solves": self.consistent_mass_unconverged,
                 "neighbour_rebuilds": self.neighbor_builds,
                 "total_mass_kg": s.total_mass(),
                 "kinetic_energy_J": s.kinetic_energy(),

@@ -192,8 +192,9 @@ def wall_box(
 ) -> WallBody:
     """Wall particles around the 2D box ``[lower, upper]`` (the fluid region), ``layers`` deep.
 
-    Particles sit on the lattice of spacing ``spacing`` continued outside the box, so the fluid
-    lattice of :func:`lattice` and the wall lattice line up. The normal of each wall particle
+    Wall particles sit at ``(k + 1/2) spacing`` outside each side (``k < layers``); along a
+    side they follow the lattice of :func:`lattice` when the box is a whole number of
+    spacings (otherwise the side-wall rows are spread evenly over the height). The normal of each wall particle
     points into the box (corner particles get the diagonal). ``open_top`` leaves the top side
     open. With support ``2h = 2.6 Δx`` three layers cover a full kernel support.
     """
@@ -203,13 +204,21 @@ def wall_box(
         raise ValueError("wall_box is 2D: lower and upper must be (2,) points")
     if layers < 1:
         raise ValueError("wall_box: need at least one layer")
+    # layers k = 0..layers-1 at (k + 1/2) spacing outside each side; the bottom (and top)
+    # rows run under the side walls to fill the corners. Built side by side, so a box whose
+    # size is not a multiple of the spacing still gets exactly `layers` layers everywhere.
+    off = (np.arange(layers) + 0.5) * spacing
     t = layers * spacing
-    top = hi[1] if open_top else hi[1] + t
-    pts = lattice(lo - t, np.array([hi[0] + t, top]), spacing)
-    inside = np.all((pts > lo) & (pts < hi), axis=1)
-    if open_top:
-        inside |= (pts[:, 0] > lo[0]) & (pts[:, 0] < hi[0]) & (pts[:, 1] > lo[1])
-    pts = pts[~inside]
+    xs = np.arange(lo[0] - t + 0.5 * spacing, hi[0] + t, spacing)
+    xs = xs[xs < hi[0] + t - 1e-9 * spacing]
+    n_y = max(int(np.round((hi[1] - lo[1]) / spacing)), 1)
+    ys = lo[1] + (np.arange(n_y) + 0.5) * (hi[1] - lo[1]) / n_y
+    parts = [np.column_stack([np.tile(xs, layers), np.repeat(lo[1] - off, xs.size)])]
+    if not open_top:
+        parts.append(np.column_stack([np.tile(xs, layers), np.repeat(hi[1] + off, xs.size)]))
+    parts.append(np.column_stack([np.repeat(lo[0] - off, ys.size), np.tile(ys, layers)]))
+    parts.append(np.column_stack([np.repeat(hi[0] + off, ys.size), np.tile(ys, layers)]))
+    pts = np.ascontiguousarray(np.vstack(parts))
     # inward normal: direction from the particle to the closest point of the box
     closest = np.clip(pts, lo, hi)
     nrm = closest - pts

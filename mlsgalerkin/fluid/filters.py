@@ -29,9 +29,9 @@ def _mls_filter(indptr, indices, values, rho, rho0, n_fluid, out):
         for q in range(indptr[i], indptr[i + 1]):
             j = indices[q]
             if j < n_fluid:
-                s += values[q] * rho[j] / rho0[j]
+                s += values[q] * (rho[j] / rho0[j])
                 z += values[q]
-        out[i] = rho0[i] * s / z if z >= 0.5 else rho[i]
+        out[i] = rho0[i] * (s / z) if z >= 0.5 else rho[i]
 
 
 @numba.njit(parallel=True, cache=True)

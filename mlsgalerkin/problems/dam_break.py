@@ -1,0 +1,130 @@
+r"""Dam break on a dry floor: Martin & Moyce (1952), square-based column ``n² = h/a = 2``.
+
+A water column of width ``a`` and height ``2a`` stands against the left wall of a tank and
+collapses at ``t = 0``. The surge front ``z`` (distance from the left wall) is compared in the
+dimensionless variables of the experiment,
+
+.. math:: Z = z/a,\qquad T = t\sqrt{2g/a},
+
+with the digitised data in ``shared/reference/data/martin_moyce_1952.csv`` (both column widths,
+2.25 in and 1.125 in) up to ``T = 3``. The front is the largest ``x`` of the fluid particles
+plus half a spacing (the particle's own cell). The tank is ``5.5 a`` long (the front reaches
+``Z ≈ 4.2`` at ``T = 3.3``), with free-slip walls; ``c0 = 10 sqrt(2 g h)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mlsgalerkin.fluid import (
+    DensityFilter, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, wall_box,
+)
+from mlsgalerkin.problems._common import hydrostatic_density
+from mlsgalerkin.scene import Approximation, Output, Probe, Scene
+
+__all__ = ["Parameters", "make_scene", "analyse", "load_martin_moyce", "SMOKE"]
+
+SMOKE = {"dx": 0.0057, "t_end": 0.02}
+INCH = 0.0254
+
+
+@dataclass(frozen=True)
+class Parameters:
+    column_width: float = 2.25 * INCH   #: a (m); the column is a wide and 2a high
+    dx: float = 2.25 * INCH / 40        #: particle spacing (m)
+    t_end: float = 0.17                 #: end time (s); T = 3 at 0.162 s for a = 2.25 in
+    tank_length_factor: float = 5.5     #: tank length / a
+    rho: float = 1000.0                 #: water density (kg/m³)
+    alpha: float = 0.05                 #: Monaghan artificial viscosity
+    h_factor: float = 1.3               #: h / dx
+    c0_factor: float = 10.0             #: c0 / sqrt(2 g h)
+    g: float = 9.81                     #: gravity (m/s²)
+    frame_every: float = 0.01           #: seconds between VTU frames
+    gif: bool = False                   #: render animation.gif
+
+
+def make_scene(p: Parameters = Parameters()) -> Scene:
+    a = p.column_width
+    height = 2.0 * a
+    c0 = p.c0_factor * math.sqrt(2.0 * p.g * height)
+    water = FluidBody.block("water", (0.0, 0.0), (a, height), p.dx, [Phase("water", p.rho)])
+    water.density[:] = hydrostatic_density(c0, np.full(water.n, p.rho), height - water.positions[:, 1], p.g)
+    walls = wall_box((0.0, 0.0), (p.tank_length_factor * a, 1.4 * height), p.dx, layers=3, reference_density=p.rho)
+    effects = [TaitPressure(c0, u_max=math.sqrt(2.0 * p.g * height)), Gravity((0.0, -p.g)), Walls("free_slip"),
+               MonaghanViscosity(p.alpha), DensityFilter(20)]
+    n_fluid = water.n
+
+    def front_x(s) -> float:
+        return float(s.x[:n_fluid, 0].max()) + 0.5 * p.dx
+
+    return Scene(
+        [water, walls], effects, t_end=p.t_end, name="dam_break",
+        approximation=Approximation(h_factor=p.h_factor),
+        output=Output(every=p.frame_every, gif=p.gif, png=p.gif, color_by="pressure"),
+        probes=[Probe("front_x", front_x)],
+        parameters=dict(p.__dict__),
+    )
+
+
+def load_martin_moyce(path: str | Path | None = None) -> dict[float, np.ndarray]:
+    """Martin & Moyce data by column width (inches): ``{width: array (k, 2) of (T, Z)}``."""
+    if path is None:
+        path = _shared_data("martin_moyce_1952.csv")
+    import csv
+
+    lines = [ln for ln in Path(path).read_text().splitlines() if ln.strip() and not ln.startswith("#")]
+    reader = csv.DictReader(lines)
+    out: dict[float, list] = {}
+    for row in reader:
+        out.setdefault(float(row["column_width_in"]), []).append((float(row["T"]), float(row["Z"])))
+    return {w: np.array(v) for w, v in out.items()}
+
+
+def _shared_data(name: str) -> Path:
+    """Find ``shared/reference/data/name`` beside the repository (or via MLSGALERKIN_SHARED)."""
+    import os
+
+    env = os.environ.get("MLSGALERKIN_SHARED")
+    candidates = [Path(env) / "reference" / "data" / name] if env else []
+    here = Path(__file__).resolve()
+    for parent in here.parents:
+        candidates.append(parent / "shared" / "reference" / "data" / name)
+        candidates.append(parent.parent / "shared" / "reference" / "data" / name)
+    for c in candidates:
+        if c.is_file():
+            return c
+    raise FileNotFoundError(
+        f"reference data {name} not found; put the shared/ folder beside the repository or set "
+        "MLSGALERKIN_SHARED to its path"
+    )
+
+
+def analyse(result, p: Parameters, t_max: float = 3.0) -> dict:
+    """RMS deviation of ``Z(T)`` from Martin & Moyce for ``T ≤ t_max`` (interpolated at the data)."""
+    ts = result.timeseries
+    a = p.column_width
+    T = np.asarray(ts["time"]) * math.sqrt(2.0 * p.g / a)
+    Z = np.asarray(ts["front_x"]) / a
+    data = load_martin_moyce()
+    out = {"T_max": t_max}
+    devs = []
+    for w, tz in sorted(data.items()):
+        sel = (tz[:, 0] <= t_max) & (tz[:, 0] <= T.max())
+        if not sel.any():
+            continue
+        Zs = np.interp(tz[sel, 0], T, Z)
+        dev = Zs - tz[sel, 1]
+        devs.append(dev)
+        out[f"rms_deviation_{w:g}in"] = float(np.sqrt(np.mean(dev**2)))
+        out[f"points_{w:g}in"] = int(sel.sum())
+    alld = np.concatenate(devs) if devs else np.array([np.nan])
+    out["rms_deviation_Z"] = float(np.sqrt(np.mean(alld**2)))
+    out["mean_deviation_Z"] = float(np.mean(alld))
+    out["particles_per_column_width"] = a / p.dx
+    out["headline"] = (f"surge front: RMS deviation from Martin & Moyce {out['rms_deviation_Z']:.3f} (in Z = z/a) "
+                       f"for T <= {t_max:g}, a/dx = {a / p.dx:.0f}")
+    return out

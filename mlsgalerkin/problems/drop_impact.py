@@ -1,0 +1,151 @@
+r"""Drop impact of seed 001 §4 (seed digest §9.2): a circular drop at 2 m/s onto still liquid.
+
+Seed parameters: ``ρ = 1000 kg/m³``, ``μ = 0.5 Pa s`` (500 times water: a very viscous
+liquid), impact speed 2 m/s, 5539 particles, output at the seed's times up to 0.1557 s.
+The seed gives no sizes; this reproduction chooses a drop of diameter 20 mm over a pool
+120 mm wide and 43 mm deep with ``Δx = 1`` mm (5474 fluid particles, close to the seed's
+5539), gravity acting, free-slip walls and ``c0 = 10 · 2 m/s``. The drop starts 1.5 Δx above
+the surface.
+
+Checked: no instability up to ``t_end`` (the watchdog stays silent), the mass is exact, and
+the total energy ``E = KE + PE + E_int`` (``E_int = Σ M B/ρ0 [(r^{γ−1} − 1)/(γ−1) + 1/r − 1]``,
+``r = ρ/ρ0``, the Tait fluid's stored energy) does not grow: the viscous and artificial
+dissipation only remove energy. A panel of snapshots at the seed's output times is written
+to ``snapshots.png``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mlsgalerkin.fluid import (
+    DensityFilter, FluidBody, Gravity, MonaghanViscosity, NewtonianViscosity, Phase, TaitPressure, Walls,
+    lattice, wall_box,
+)
+from mlsgalerkin.problems._common import hydrostatic_density
+from mlsgalerkin.scene import Approximation, Output, Probe, Scene
+
+__all__ = ["Parameters", "make_scene", "analyse", "SEED_OUTPUT_TIMES", "SMOKE"]
+
+SEED_OUTPUT_TIMES = (0.0018, 0.0099, 0.0297, 0.0477, 0.0657, 0.0837, 0.1017, 0.1197, 0.1377, 0.1557)
+SMOKE = {"dx": 0.004, "t_end": 0.01}
+
+
+@dataclass(frozen=True)
+class Parameters:
+    drop_diameter: float = 0.02    #: m
+    pool_width: float = 0.12       #: m
+    pool_depth: float = 0.043      #: m
+    speed: float = 2.0             #: impact speed (m/s), downwards
+    rho: float = 1000.0            #: kg/m³
+    viscosity: float = 0.5         #: Pa s
+    dx: float = 0.001              #: m
+    t_end: float = 0.16            #: s
+    c0_factor: float = 10.0        #: c0 / speed
+    alpha: float = 0.05            #: Monaghan artificial viscosity
+    h_factor: float = 1.3          #: h / dx
+    g: float = 9.81                #: m/s²
+    gif: bool = True               #: render animation.gif and final.png
+
+
+def internal_energy(s, n: int, c0: float, gamma: float = 7.0) -> float:
+    """Stored energy of the Tait fluid, ``Σ M B/ρ0 [(r^{γ−1} − 1)/(γ−1) + 1/r − 1]`` (J/m)."""
+    r = s.rho[:n] / s.rho0[:n]
+    B_over_rho0 = c0**2 / gamma
+    return float(np.sum(s.M[:n] * B_over_rho0 * ((r ** (gamma - 1) - 1) / (gamma - 1) + 1 / r - 1)))
+
+
+def make_scene(p: Parameters = Parameters()) -> Scene:
+    c0 = p.c0_factor * p.speed
+    water = Phase("liquid", p.rho, p.viscosity)
+    pool = lattice((0.0, 0.0), (p.pool_width, p.pool_depth), p.dx)
+    R = 0.5 * p.drop_diameter
+    centre = np.array([0.5 * p.pool_width, p.pool_depth + R + 1.5 * p.dx])
+    box = lattice(centre - R - p.dx, centre + R + p.dx, p.dx)
+    box = box - box.mean(axis=0) + centre  # centre the lattice on the drop
+    drop = box[np.linalg.norm(box - centre, axis=1) < R]
+    pos = np.vstack([pool, drop])
+    vel = np.zeros_like(pos)
+    vel[pool.shape[0]:, 1] = -p.speed
+    depth = np.where(np.arange(len(pos)) < pool.shape[0], p.pool_depth - pos[:, 1], 0.0)
+    rho = hydrostatic_density(c0, np.full(len(pos), p.rho), depth, p.g)
+    body = FluidBody("liquid", pos, p.dx, [water], velocity=vel, density=rho)
+    walls = wall_box((0.0, 0.0), (p.pool_width, 2.2 * p.pool_depth), p.dx, layers=3, reference_density=p.rho)
+    n = body.n
+
+    def total_energy(s) -> float:
+        ke = 0.5 * float(np.sum(s.M[:n] * np.einsum("ij,ij->i", s.v[:n], s.v[:n])))
+        pe = float(np.sum(s.M[:n] * p.g * s.x[:n, 1]))
+        return ke + pe + internal_energy(s, n, c0)
+
+    return Scene(
+        [body, walls],
+        [TaitPressure(c0, u_max=p.speed), Gravity((0.0, -p.g)), Walls("free_slip"), NewtonianViscosity(),
+         MonaghanViscosity(p.alpha), DensityFilter(20)],
+        t_end=p.t_end, name="drop_impact", approximation=Approximation(h_factor=p.h_factor),
+        output=Output(times=(0.0,) + tuple(t for t in SEED_OUTPUT_TIMES if t <= p.t_end) + (p.t_end,),
+                      probe_every=0.0005, gif=p.gif, png=p.gif, color_by="speed"),
+        probes=[Probe("total_energy", total_energy), Probe("internal_energy", lambda s: internal_energy(s, n, c0))],
+        parameters=dict(p.__dict__),
+    )
+
+
+def snapshot_figure(run_dir, out_png, color_by: str = "speed") -> None:
+    """A grid of the frames of ``run_dir/particles.pvd`` (matplotlib), written atomically."""
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from mlsgalerkin.io import read_pvd, read_vtu
+    from mlsgalerkin.studies.common import atomic_write
+
+    frames = read_pvd(run_dir / "particles.pvd")
+    k = len(frames)
+    cols = min(4, k)
+    rows = (k + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 1.9 * rows), squeeze=False)
+    vmax = None
+    for ax, (t, path) in zip(axes.ravel(), frames):
+        pts, data = read_vtu(path)
+        val = np.asarray(data[color_by])
+        wall = np.asarray(data["is_wall"]).astype(bool)
+        vmax = vmax or float(np.percentile(val[~wall], 99.5)) or 1.0
+        ax.scatter(pts[wall, 0], pts[wall, 1], s=0.3, c="0.6")
+        ax.scatter(pts[~wall, 0], pts[~wall, 1], s=0.3, c=val[~wall], cmap="viridis", vmin=0, vmax=vmax)
+        ax.set_title(f"t = {t:.4f} s", fontsize=8)
+        ax.set_aspect("equal")
+        ax.axis("off")
+    for ax in axes.ravel()[k:]:
+        ax.axis("off")
+    fig.suptitle(f"drop impact, colour = {color_by} (0 to {vmax:.2g} m/s)", fontsize=9)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=130, bbox_inches="tight")
+    plt.close(fig)
+    atomic_write(out_png, buf.getvalue())
+
+
+def analyse(result, p: Parameters) -> dict:
+    ts = result.timeseries
+    E = np.asarray(ts["total_energy"])
+    mass = np.asarray(ts["total_mass"])
+    growth = float(np.max(E - E[0]))
+    out = {
+        "t_reached_s": float(ts["time"][-1]),
+        "mass_change_kg": float(mass.max() - mass.min()),
+        "energy_initial_J": float(E[0]), "energy_final_J": float(E[-1]),
+        "energy_max_growth_J": growth,
+        "energy_max_growth_relative_to_initial_kinetic": growth / float(ts["kinetic_energy"][0]),
+        "energy_grows": bool(growth > 1e-3 * float(ts["kinetic_energy"][0])),
+    }
+    if result.out is not None:
+        snapshot_figure(result.out, result.out / "snapshots.png")
+        out["snapshots"] = "snapshots.png"
+    out["headline"] = (f"reached t = {out['t_reached_s']:.4f} s; mass change {out['mass_change_kg']:.1e} kg; "
+                       f"energy {out['energy_initial_J']:.4g} -> {out['energy_final_J']:.4g} J "
+                       f"(max growth {out['energy_max_growth_relative_to_initial_kinetic']:+.2e} of the initial KE)")
+    return out

@@ -1,0 +1,200 @@
+"""Scene validation (every problem at once, before any work), only the listed effects run,
+and the per-effect time report of the run summary."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mlsgalerkin.fluid.effects as effects_mod
+import mlsgalerkin.simulation as simulation_mod
+from mlsgalerkin.fluid import (
+    BulkViscosity,
+    DensityFilter,
+    Effect,
+    FluidBody,
+    Gravity,
+    MonaghanViscosity,
+    Phase,
+    TaitPressure,
+    WallBody,
+    Walls,
+    wall_box,
+)
+from mlsgalerkin.scene import Approximation, Probe, Scene, SceneError
+from mlsgalerkin.simulation import Simulation
+
+DX = 0.02
+WATER = [Phase("water", 1000.0)]
+
+
+def _water(**kw) -> FluidBody:
+    return FluidBody.block("water", (0.0, 0.0), (0.2, 0.1), DX, WATER, **kw)
+
+
+class _Needy(Effect):
+    """An effect that reads a quantity no listed effect provides."""
+
+    name = "needy"
+    stages = ("force",)
+    reads = ("temperature",)
+
+
+def _problems(scene: Scene) -> str:
+    with pytest.raises(SceneError) as err:
+        scene.validate()
+    return str(err.value)
+
+
+# ------------------------------------------------------------------------------ validation
+def test_validation_lists_every_problem_at_once():
+    scene = Scene(
+        [_water(), "banana"],
+        [Gravity(), Walls("free_slip"), _Needy()],
+        t_end=-1.0,
+        name="broken",
+    )
+    msg = _problems(scene)
+    expected = [
+        "unknown body 'banana'",
+        "t_end must be positive, got -1.0",
+        "no pressure model",
+        "reads ['temperature'], which no listed effect provides",
+        "Walls: the scene has no WallBody",
+    ]
+    for fragment in expected:
+        assert fragment in msg, f"{fragment!r} missing from:\n{msg}"
+    # one bullet per problem, and the header counts them
+    n = msg.count("\n  - ")
+    assert n >= len(expected)
+    assert msg.startswith(f"scene 'broken' has {n} problems:")
+
+
+@pytest.mark.parametrize(
+    "make, fragment",
+    [
+        (lambda: Scene([_water()], [TaitPressure(10.0), TaitPressure(20.0)], t_end=0.1),
+         "two pressure models listed"),
+        (lambda: Scene([_water()], [TaitPressure(10.0), Gravity(), Gravity()], t_end=0.1),
+         "effects listed twice: ['Gravity']"),
+        (lambda: Scene([_water(), WallBody("w", np.array([[0.0, -0.01], [0.02, -0.01]]), DX)],
+                       [TaitPressure(10.0), Walls("free_slip")], t_end=0.1),
+         "free_slip needs wall normals"),
+        (lambda: Scene([_water()], [TaitPressure(10.0)], t_end=0.1,
+                       approximation=Approximation(kernel="no_such_kernel")),
+         "unknown kernel 'no_such_kernel'"),
+        (lambda: Scene([_water()], [TaitPressure(10.0)], t_end=0.1,
+                       probes=[Probe("T_mean", lambda s: 0.0, reads=("temperature",))]),
+         "probe 'T_mean' reads ['temperature']"),
+        (lambda: Scene([_water(), wall_box((0, 0), (0.2, 0.2), DX)], [TaitPressure(10.0)], t_end=0.1),
+         "no wall treatment: list Walls()"),
+        (lambda: Scene([_water()], [TaitPressure(10.0), "viscosity"], t_end=0.1),
+         "unknown effect 'viscosity'"),
+    ],
+    ids=["two_pressure", "duplicate", "free_slip_no_normals", "kernel", "probe", "walls_untreated",
+         "unknown_effect"],
+)
+def test_single_problems_are_reported(make, fragment):
+    assert fragment in _problems(make())
+
+
+def test_valid_scene_passes():
+    Scene([_water(), wall_box((0, 0), (0.2, 0.2), DX)],
+          [TaitPressure(10.0), Gravity(), Walls("free_slip")], t_end=0.1).validate()
+
+
+def test_simulation_validates_before_any_work(monkeypatch):
+    def forbidden(*a, **k):
+        raise AssertionError("work was done before the scene was validated")
+
+    for name in ("find_neighbors", "build_state", "evaluate_shape_functions"):
+        monkeypatch.setattr(simulation_mod, name, forbidden)
+    setups = []
+
+    class Recorder(Effect):
+        name = "recorder"
+
+        def setup(self, state, scene):
+            setups.append(1)
+
+    scene = Scene([_water()], [Gravity(), Recorder(), _Needy()], t_end=0.0)
+    with pytest.raises(SceneError) as err:
+        Simulation(scene)
+    assert "no pressure model" in str(err.value) and "t_end must be positive" in str(err.value)
+    assert setups == []
+
+
+# ----------------------------------------------------------------- only listed effects run
+STAGE_METHODS = ("kinematics", "pressure", "boundary", "stress", "force", "after_step",
+                 "time_step_limit")
+
+
+@pytest.fixture
+def calls(monkeypatch):
+    """Record ``(class name of the instance, method)`` for every stage call of every Effect
+    class in :mod:`mlsgalerkin.fluid.effects` (the base class included)."""
+    log: list[tuple[str, str]] = []
+    classes = [c for c in vars(effects_mod).values() if isinstance(c, type) and issubclass(c, Effect)]
+    assert len(classes) >= 9  # Effect + the 8 shipped effects
+    for cls in classes:
+        for meth in STAGE_METHODS:
+            if meth not in vars(cls):
+                continue  # inherited: the wrapper on the defining class records it
+            original = vars(cls)[meth]
+
+            def wrapper(self, *a, _orig=original, _meth=meth, **k):
+                log.append((type(self).__name__, _meth))
+                return _orig(self, *a, **k)
+
+            monkeypatch.setattr(cls, meth, wrapper)
+    return log
+
+
+def test_only_listed_effects_are_called(calls):
+    fl = _water(velocity=(0.1, 0.0))
+    Simulation(Scene([fl], [TaitPressure(10.0)], t_end=0.01)).run(progress=False)
+    called = {c for c, _ in calls}
+    assert called == {"TaitPressure"}, called
+    # the pressure model ran in its stage and supplied a time-step limit
+    assert {m for _, m in calls} == {"pressure", "time_step_limit"}
+
+
+def test_custom_effect_is_called_in_its_declared_stages_only(calls):
+    class Probe2(Effect):
+        name = "probe2"
+        stages = ("stress", "after_step")
+
+        # every stage is implemented; only the declared ones may run
+        def kinematics(self, s): calls.append(("Probe2", "kinematics"))
+        def pressure(self, s): calls.append(("Probe2", "pressure"))
+        def boundary(self, s): calls.append(("Probe2", "boundary"))
+        def stress(self, s): calls.append(("Probe2", "stress"))
+        def force(self, s): calls.append(("Probe2", "force"))
+        def after_step(self, s): calls.append(("Probe2", "after_step"))
+
+    sim = Simulation(Scene([_water()], [TaitPressure(10.0), Probe2()], t_end=1.0))
+    res = sim.run(progress=False, max_steps=5)
+    mine = [m for c, m in calls if c == "Probe2"]
+    # stress: once per evaluation (initial + one per kdk step); after_step once per step
+    assert mine.count("stress") == 1 + res.summary["steps"]
+    assert mine.count("after_step") == res.summary["steps"] == 5
+    assert set(mine) <= {"stress", "after_step", "time_step_limit"}
+    assert {c for c, _ in calls} <= {"TaitPressure", "Probe2"}
+
+
+# ------------------------------------------------------------------ per-effect time report
+def test_time_report_has_one_entry_per_listed_effect():
+    walls = wall_box((0, 0), (0.2, 0.2), DX)
+    listed = [TaitPressure(20.0), Gravity(), Walls("free_slip"), MonaghanViscosity(0.1),
+              DensityFilter(5)]
+    res = Simulation(Scene([_water(), walls], listed, t_end=0.01)).run(progress=False)
+    report = res.summary["time_per_stage_s"]
+    for e in listed:
+        assert e.name in report and report[e.name] >= 0.0
+    unlisted = [BulkViscosity(), effects_mod.NewtonianViscosity(), effects_mod.FreeSurfaceDetection()]
+    for e in unlisted:
+        assert e.name not in report
+    # solver stages are reported next to the effects, fractions sum to one
+    for stage in ("neighbors", "shape_functions", "velocity_gradient", "internal_force", "integrate"):
+        assert stage in report
+    assert sum(res.summary["time_per_stage_fraction"].values()) == pytest.approx(1.0, abs=1e-3)
