@@ -385,7 +385,7 @@ def test_expansion_reports_tensile_instability():
     # measured: min pressure −1.5 kPa, all particles in tension
     assert ti["min_pressure_Pa"] < -500.0
     assert ti["max_fraction_negative"] > 0.5
-    assert ti["steps_with_negative_pressure"] > 0 and ti["clamped"] is False
+    assert ti["steps_with_negative_pressure"] > 0 and ti["mode"] == "allow"
     assert res.state.p.min() < 0
 
 
@@ -420,13 +420,15 @@ def _tait_internal_energy(c0: float, gamma: float = 7.0):
 
 def test_drop_impact_smoke(tmp_path):
     """A water disc (R = 0.02 m, dx = 0.004 m) hitting a pool (0.2 × 0.05 m) at 5 m/s,
-    c0 = 50 m/s, Monaghan α = 0.1, μ = 0.5 Pa s, run to 0.012 s (~330 steps).
+    c0 = 50 m/s, Monaghan α = 0.1, μ = 0.5 Pa s, run to 0.03 s (~900 steps; splash included).
 
     Measured: KE + PE ends 37 % below its start (viscous and artificial dissipation);
     including the Tait internal energy Σ M e(ρ), the total never rose more than 2.5e-8 of the
     initial kinetic energy above its start (round-off and the kdk time discretisation).
-    Note: continued to ~0.0164 s the run diverges (watchdog: a splash particle with 5
-    neighbours oscillates with a doubling amplitude every step) — see the report."""
+    History: with the library's condition limit 1e8 this run diverged at ~0.0164 s (a splash
+    particle with 5 neighbours kept a near-singular linear fit whose large gradients made a
+    mode stiffer than the h/c time step); the fluid's condition limit 100 sends such
+    particles to Shepard and the run is stable (checked to 0.05 s)."""
     dx, R, U, Hp, W = 0.004, 0.02, 5.0, 0.05, 0.2
     c0 = 10.0 * U
     phases = [Phase("water", 1000.0, viscosity=0.5)]
@@ -439,7 +441,7 @@ def test_drop_impact_smoke(tmp_path):
     walls = wall_box((0.0, 0.0), (W, 2 * Hp), dx, layers=3)
     effects = [TaitPressure(c0), Gravity(), Walls("free_slip"), MonaghanViscosity(0.1),
                NewtonianViscosity()]
-    scene = Scene([pool, drop, walls], effects, t_end=0.012,
+    scene = Scene([pool, drop, walls], effects, t_end=0.03,
                   probes=[Probe("internal_energy", _tait_internal_energy(c0))])
     res = Simulation(scene).run(out=tmp_path, progress=False)  # raises if the watchdog fires
     s, ts = res.state, res.timeseries

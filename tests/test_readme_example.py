@@ -24,3 +24,16 @@ def test_readme_example_runs_and_matches_its_printed_output():
     assert printed, "the example printed nothing"
     for line in claimed:
         assert line in printed, f"README claims {line!r}, the example printed {printed}"
+
+
+def test_readme_fluid_example_runs(tmp_path, monkeypatch):
+    """The README's second example (a short dam break through run_problem) runs as written."""
+    text = README.read_text(encoding="utf-8")
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    code = next(b for b in blocks if "run_problem" in b)
+    monkeypatch.chdir(tmp_path)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        exec(compile(code, "README.md", "exec"), {"__name__": "__readme__"})
+    assert "surge front" in out.getvalue()
+    assert (tmp_path / "results" / "db" / "summary.json").is_file()

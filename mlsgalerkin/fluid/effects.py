@@ -124,8 +124,10 @@ class TaitPressure(Effect):
     Give ``c0`` (m/s) or ``u_max`` (the expected largest speed; then ``c0 = u_max/mach``).
     A :class:`~mlsgalerkin.fluid.eos.MachNumberWarning` is raised when ``u_max/c0 > 0.1``.
     ``negative_pressure``: ``"allow"`` (default; a tensile-instability diagnostic counts the
-    fluid particles with ``p < 0``) or ``"clamp"`` (``p = max(p, 0)``). Time-step limit: the
-    acoustic CFL ``cfl · h/(c + |v|)``.
+    fluid particles with ``p < 0``), ``"clamp"`` (``p = max(p, 0)``; the density may still
+    drift below ``ρ0``) or ``"cavitate"`` (a liquid that cannot carry tension: the density is
+    floored at ``ρ0``, so ``p ≥ 0`` and a splashing particle's volume never exceeds ``M/ρ0``;
+    the floorings are counted). Time-step limit: the acoustic CFL ``cfl · h/(c + |v|)``.
     """
 
     name = "tait_pressure"
@@ -142,6 +144,7 @@ class TaitPressure(Effect):
         self.min_pressure = math.inf
         self.max_negative_fraction = 0.0
         self.steps_with_negative = 0
+        self.cavitated = 0
 
     def __repr__(self) -> str:
         return f"TaitPressure(c0={self.c0:g}, gamma={self.gamma:g})"
@@ -155,8 +158,8 @@ class TaitPressure(Effect):
         _positive("cfl", self.cfl, problems, "TaitPressure")
         if not self.gamma >= 1:
             problems.append(f"TaitPressure: gamma must be >= 1, got {self.gamma}")
-        if self.negative_pressure not in ("allow", "clamp"):
-            problems.append("TaitPressure: negative_pressure must be 'allow' or 'clamp'")
+        if self.negative_pressure not in ("allow", "clamp", "cavitate"):
+            problems.append("TaitPressure: negative_pressure must be 'allow', 'clamp' or 'cavitate'")
         if not problems and self.u_max is not None:
             TaitEOS(1.0, self.c0, self.gamma).check_mach(self.u_max)
         return problems
@@ -168,6 +171,10 @@ class TaitPressure(Effect):
 
     def pressure(self, s: FluidState) -> None:
         f = s.fluid
+        if self.negative_pressure == "cavitate":
+            below = s.rho[f] < s.rho0[f]
+            self.cavitated += int(np.count_nonzero(below))
+            np.maximum(s.rho[f], s.rho0[f], out=s.rho[f])
         ratio = s.rho[f] / s.rho0[f]
         p = self._B * (ratio**self.gamma - 1.0)
         negative = p < 0.0
@@ -193,18 +200,20 @@ class TaitPressure(Effect):
                 "min_pressure_Pa": None if math.isinf(self.min_pressure) else self.min_pressure,
                 "max_fraction_negative": self.max_negative_fraction,
                 "steps_with_negative_pressure": self.steps_with_negative,
-                "clamped": self.negative_pressure == "clamp",
+                "mode": self.negative_pressure,
+                "cavitation_floorings": self.cavitated,
             },
         }
 
     def state_dict(self) -> dict[str, Any]:
         return {"min_pressure": self.min_pressure, "max_negative_fraction": self.max_negative_fraction,
-                "steps_with_negative": self.steps_with_negative}
+                "steps_with_negative": self.steps_with_negative, "cavitated": self.cavitated}
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
         self.min_pressure = d["min_pressure"]
         self.max_negative_fraction = d["max_negative_fraction"]
         self.steps_with_negative = d["steps_with_negative"]
+        self.cavitated = d.get("cavitated", 0)
 
 
 # --------------------------------------------------------------------------------------

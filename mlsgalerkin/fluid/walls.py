@@ -47,11 +47,14 @@ def _extrapolate(
 ):
     for t in prange(wall_ids.shape[0]):
         w = wall_ids[t]
+        # scalar accumulators (no per-particle heap allocation inside the parallel loop)
         sw = 0.0
         sp = 0.0
         sr = 0.0
-        sv = np.zeros(3)
-        srx = np.zeros(3)
+        hyd = 0.0
+        sv0 = 0.0
+        sv1 = 0.0
+        sv2 = 0.0
         for q in range(indptr[w], indptr[w + 1]):
             f = indices[q]
             if not is_fluid[f]:
@@ -67,21 +70,24 @@ def _extrapolate(
             sp += p[f] * wgt
             sr += rho[f] * wgt
             for a in range(dim):
-                sv[a] += v[f, a] * wgt
-                srx[a] += rho[f] * (x[w, a] - x[f, a]) * wgt
+                hyd += g_minus_a[a] * rho[f] * (x[w, a] - x[f, a]) * wgt
+            sv0 += v[f, 0] * wgt
+            sv1 += v[f, 1] * wgt
+            if dim == 3:
+                sv2 += v[f, 2] * wgt
         if sw > 0.0:
-            hyd = 0.0
-            for a in range(dim):
-                hyd += g_minus_a[a] * srx[a]
             p_out[t] = (sp + hyd) / sw
             rho_out[t] = sr / sw
-            for a in range(dim):
-                sv[a] /= sw
+            sv0 /= sw
+            sv1 /= sw
+            sv2 /= sw
         else:
             p_out[t] = 0.0
             rho_out[t] = rho_ref[t]
-            for a in range(dim):
-                sv[a] = wall_velocity[t, a]
+            sv0 = wall_velocity[t, 0]
+            sv1 = wall_velocity[t, 1]
+            sv2 = wall_velocity[t, 2] if dim == 3 else 0.0
+        sv = (sv0, sv1, sv2)
         if slip == 0:
             for a in range(dim):
                 v_out[t, a] = 2.0 * wall_velocity[t, a] - sv[a]

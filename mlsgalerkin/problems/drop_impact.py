@@ -82,7 +82,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
 
     return Scene(
         [body, walls],
-        [TaitPressure(c0, u_max=p.speed), Gravity((0.0, -p.g)), Walls("free_slip"), NewtonianViscosity(),
+        [TaitPressure(c0, u_max=p.speed, negative_pressure="cavitate"), Gravity((0.0, -p.g)), Walls("free_slip"),
+         NewtonianViscosity(),
          MonaghanViscosity(p.alpha), DensityFilter(20)],
         t_end=p.t_end, name="drop_impact", approximation=Approximation(h_factor=p.h_factor),
         output=Output(times=(0.0,) + tuple(t for t in SEED_OUTPUT_TIMES if t <= p.t_end) + (p.t_end,),
