@@ -142,7 +142,7 @@ class RunOutput:
             "kinetic_energy": s.kinetic_energy(), "total_mass": s.total_mass(),
         }
         if self._g is not None:
-            row["potential_energy"] = -float(s.M[f] @ (s.x[f] @ self._g))
+            row["potential_energy"] = -float(np.einsum("i,ij,j->", s.M[f], s.x[f], self._g))  # no BLAS
         mom = s.momentum()
         for a in range(s.dim):
             row[f"momentum_{'xyz'[a]}"] = float(mom[a])
