@@ -554,7 +554,7 @@ def _progress_bar(total: float, start: float, disable: bool):
         return _NoBar()
     from tqdm.auto import tqdm
 
-    return tqdm(total=total, initial=start, unit="s", unit_scale=False, desc="simulated time",
+    return tqdm(total=total, initial=start, unit="s", unit_scale=False, desc="simulated time", mininterval=1.0,
                 bar_format="{l_bar}{bar}| {n:.4f}/{total:.4f} s [{elapsed}<{remaining}{postfix}]")
 
 
