@@ -65,9 +65,17 @@ def error_of(problem: str, res: dict) -> tuple[str, float]:
     return "max energy growth / initial KE", max(res["energy_max_growth_relative_to_initial_kinetic"], 0.0)
 
 
-def run_all(out: Path, runs: Path, quick: bool) -> list[dict]:
+def run_all(out: Path, runs: Path, quick: bool, only: list[str] | None = None) -> list[dict]:
+    """Run every case (or only the problems in ``only``, keeping the other rows of the last
+    ``results.json``)."""
     rows = []
+    previous = json.loads((out / "results.json").read_text()) if only and (out / "results.json").exists() else []
     for k, (problem, label, ov) in enumerate(cases(quick)):
+        if only and problem not in only:
+            old = [r for r in previous if r["problem"] == problem and r["case"] == label]
+            if old:
+                rows.append(old[0])
+            continue
         run_dir = runs / f"{problem}_{k:02d}"
         if run_dir.exists():
             shutil.rmtree(run_dir)
@@ -263,6 +271,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="one coarse run per problem (< 1 min)")
     parser.add_argument("--out", default="verification/results/fluid_validation", help="tables and figures")
     parser.add_argument("--runs", default="results/fluid_runs", help="particle output of the runs (large)")
+    parser.add_argument("--only", nargs="+", metavar="PROBLEM",
+                        help="rerun only these problems, keeping the other rows of results.json")
     parser.add_argument("--reanalyse", action="store_true",
                         help="recompute results from the saved runs (after changing an analyse function)")
     args = parser.parse_args(argv)
@@ -272,7 +282,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.reanalyse:
         rows = reanalyse(out, runs)
     else:
-        rows = run_all(out, runs, args.quick)
+        rows = run_all(out, runs, args.quick, args.only)
     header = ["problem", "case", "dx_m", "particles", "fluid_particles", "steps", "wall_time_s",
               "particle_steps_per_s", "error", "error_measure", "fallback_points"]
     atomic_write(out / "fluid_validation.csv", csv_text(header, [[format_cell(r[h]) for h in header] for r in rows]))
