@@ -17,6 +17,8 @@ import numba
 import numpy as np
 from numba import prange
 
+from mlsgalerkin.assembly import _sum_slabs, _thread_blocks
+
 __all__ = ["velocity_gradient_divergence", "internal_force_and_mass"]
 
 
@@ -75,9 +77,7 @@ def _force_mass(indptr, indices, values, grads, sig_v, M, n_nodes, n_blocks, wan
     n_rows = indptr.shape[0] - 1
     dim = grads.shape[1]
     nc = dim + 1
-    edges = np.empty(n_blocks + 1, dtype=np.int64)
-    for b in range(n_blocks + 1):
-        edges[b] = (n_rows * b) // n_blocks
+    edges = _thread_blocks(n_rows, n_blocks)
     slab = np.zeros((n_blocks, n_nodes, nc))
     for blk in prange(n_blocks):
         for k in range(edges[blk], edges[blk + 1]):
@@ -91,12 +91,7 @@ def _force_mass(indptr, indices, values, grads, sig_v, M, n_nodes, n_blocks, wan
                     slab[blk, i, a] -= acc
                 if want_mass:
                     slab[blk, i, dim] += values[p] * mk
-    out = np.zeros((n_nodes, nc))
-    for i in prange(n_nodes):
-        for b in range(n_blocks):
-            for c in range(nc):
-                out[i, c] += slab[b, i, c]
-    return out
+    return _sum_slabs(slab)
 
 
 def internal_force_and_mass(table, stress_volume: np.ndarray, masses: np.ndarray, n_threads: int,
