@@ -50,6 +50,7 @@ def cases(quick: bool) -> list[tuple[str, str, dict]]:
         ("gravity_current", "rho_heavy=1200", {"rho_heavy": 1200.0, "dx": 0.003, "t_end": 1.4, "gif": False}),
         ("gravity_current", "rho_heavy=2000", {"rho_heavy": 2000.0, "dx": 0.003, "t_end": 0.7, "gif": False}),
     ]
+    out += [("gravity_current", "free surface, dx=0.002", {"lid": False, "dx": 0.002, "gif": False})]
     out += [("drop_impact", "dx=0.001", {"dx": 0.001, "gif": True})]
     return out
 
@@ -137,7 +138,7 @@ def plots(rows: list[dict], out: Path) -> None:
     # work-precision: error against wall time per problem
     fig, ax = plt.subplots(figsize=(6, 4.2))
     for problem, marker in (("hydrostatic", "o"), ("dam_break", "s"), ("gravity_current", "^")):
-        rr = [r for r in rows if r["problem"] == problem and not r["case"].startswith(("D=", "rho_"))]
+        rr = [r for r in rows if r["problem"] == problem and not r["case"].startswith(("D=", "rho_", "free"))]
         if rr:
             ax.loglog([r["wall_time_s"] for r in rr], [max(r["error"], 1e-6) for r in rr], marker + "-", label=problem)
             for r in rr:

@@ -166,7 +166,7 @@ class TaitPressure(Effect):
 
     def setup(self, state: FluidState, scene: "Scene") -> None:
         f = state.fluid
-        self._B = state.rho0[f] * self.c0**2 / self.gamma
+        self._B_over_rho0 = self.c0**2 / self.gamma  # B = rho0 c0^2/gamma, per particle via s.rho0
         state.c = np.full(state.n, self.c0)
 
     def pressure(self, s: FluidState) -> None:
@@ -176,7 +176,7 @@ class TaitPressure(Effect):
             self.cavitated += int(np.count_nonzero(below))
             np.maximum(s.rho[f], s.rho0[f], out=s.rho[f])
         ratio = s.rho[f] / s.rho0[f]
-        p = self._B * (ratio**self.gamma - 1.0)
+        p = (self._B_over_rho0 * s.rho0[f]) * (ratio**self.gamma - 1.0)
         negative = p < 0.0
         n_neg = int(np.count_nonzero(negative))
         if n_neg:
