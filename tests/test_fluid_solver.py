@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import math
-import shutil
 from pathlib import Path
 
 import numpy as np
@@ -225,13 +224,22 @@ def test_consistent_mass_gives_gravity_acceleration():
 
 
 @pytest.mark.filterwarnings("ignore:consistent-mass CG did not converge:RuntimeWarning")
-@pytest.mark.xfail(strict=True, raises=SimulationDiverged, reason=(
-    "finding: the MLS consistent mass m_ij = Σ_k M_k N_i(x_k) N_j(x_k) has eigenvalues down to "
-    "~5e-6 of the particle mass (condition ~2e5 at h = 1.3 Δx), so those modes have a frequency "
-    "far above the acoustic CFL limit; the acceleration error grows ~30x per step and the free "
-    "fall diverges within ~20 steps (also with an exact direct solve)"))
-def test_consistent_mass_free_fall_stays_stable():
-    Simulation(free_block(velocity=(0.3, 0.1), gravity=True, mass="consistent")).run(progress=False)
+def test_consistent_mass_is_ill_conditioned_and_the_watchdog_stops_it():
+    """Documented limitation (docs/theory/galerkin_fluid.md): the MLS consistent mass
+    m_ij = Σ_k M_k N_i(x_k) N_j(x_k) has eigenvalues down to ~5e-6 of the particle mass, so its
+    modes are far above the acoustic CFL limit and a free fall diverges within ~20 steps (also
+    with an exact solve). What must hold: the cause is measurable, and the run is stopped by
+    the watchdog with a diagnosis instead of returning NaN."""
+    from mlsgalerkin.assembly import consistent_mass
+
+    sim = Simulation(free_block(velocity=(0.3, 0.1), gravity=True, mass="consistent"))
+    sim.initialise()
+    Mc = consistent_mass(sim.state.table, sim.state.M).toarray()
+    eig = np.linalg.eigvalsh(Mc)
+    assert eig.min() < 1e-3 * sim.state.M.mean()  # measured ~5e-6: near-singular
+    with pytest.raises(SimulationDiverged) as info:
+        sim.run(progress=False)
+    assert info.value.diagnosis["step"] < 100 and info.value.diagnosis["quantity"]
 
 
 # ----------------------------------------------------------------------------- watchdog
@@ -481,14 +489,13 @@ def test_long_hydrostatic_run_kinetic_energy_bounded(tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("effects", [[], [BulkViscosity()]], ids=["no_viscosity", "bulk_viscosity"])
-@pytest.mark.xfail(strict=True, reason=(
-    "finding: velocity modes with zero discrete divergence are invisible to the nodal-integrated "
-    "pressure and to the bulk viscosity; without the Monaghan pair viscosity the tank's kinetic "
-    "energy grows (measured 3e-5 M g H at 0.2 s, 1e-4 at 1 s, 2e-3 at 3 s; the run diverges at "
-    "~5 s without, ~9 s with BulkViscosity)"))
-def test_hydrostatic_without_pair_viscosity_is_not_long_time_stable(effects, tmp_path):
+def test_hydrostatic_without_pair_viscosity_gains_energy(effects, tmp_path):
+    """Documented finding: velocity modes with zero discrete divergence are invisible to the
+    nodal-integrated pressure and to the bulk viscosity, so without the Monaghan pair viscosity
+    the tank's kinetic energy grows (measured 1e-4 M g H at 1 s, 2e-3 at 3 s; diverges at ~5 s
+    without, ~9 s with BulkViscosity) while the Monaghan tank stays below 6e-6 M g H."""
     scene = hydrostatic_tank(dx=0.04, t_end=3.0, effects=effects)
     res = Simulation(scene).run(out=tmp_path, progress=False)
     ts = res.timeseries
     scale = float(ts["total_mass"][0]) * G * 0.4
-    assert ts["kinetic_energy"].max() < 1e-4 * scale  # the stable (Monaghan) tank: 5.8e-6
+    assert ts["kinetic_energy"].max() > 1e-4 * scale
