@@ -44,6 +44,8 @@ __all__ = [
     "traction_force",
     "velocity_gradient",
     "continuity_rate",
+    "velocity_gradient_divergence",
+    "internal_force_and_mass",
     "internal_force_reference",
     "lumped_mass_reference",
     "velocity_gradient_reference",
@@ -116,39 +118,65 @@ def _scatter_weighted_values(indptr, indices, values, weight, n_nodes, n_blocks)
 
 
 @numba.njit(parallel=True, cache=True)
-def _scatter_stress(indptr, indices, grads, stress_v, n_nodes, n_blocks):
-    """``f[i, a] = −Σ_k Σ_b (σ_k V_k)[a, b] ∂_b N_i(x_k)`` with ``stress_v = σ V``."""
+def _force_mass(indptr, indices, values, grads, sig_v, M, n_nodes, n_blocks, want_mass):
+    """``out[i, :d] = −Σ_k (σ V)_k ∇N_i(x_k)`` and, if ``want_mass``, ``out[i, d] = Σ_k N_i(x_k) M_k``."""
     n_rows = indptr.shape[0] - 1
     dim = grads.shape[1]
+    nc = dim + 1
     edges = _thread_blocks(n_rows, n_blocks)
-    slab = np.zeros((n_blocks, n_nodes, dim))
+    slab = np.zeros((n_blocks, n_nodes, nc))
     for blk in prange(n_blocks):
         for k in range(edges[blk], edges[blk + 1]):
+            mk = M[k]
             for p in range(indptr[k], indptr[k + 1]):
                 i = indices[p]
                 for a in range(dim):
                     acc = 0.0
                     for b in range(dim):
-                        acc += stress_v[k, a, b] * grads[p, b]
+                        acc += sig_v[k, a, b] * grads[p, b]
                     slab[blk, i, a] -= acc
+                if want_mass:
+                    slab[blk, i, dim] += values[p] * mk
     return _sum_slabs(slab)
 
 
 @numba.njit(parallel=True, cache=True)
-def _gather_gradient(indptr, indices, grads, v):
-    """``L[k, a, b] = Σ_j v[j, a] ∂_b N_j(x_k)``."""
+def _grad_div(indptr, indices, grads, v, L, div):
+    """``L[k, a, b] = Σ_j v[j, a] ∂_b N_j(x_k)`` and ``div[k] = tr L_k``, accumulated in registers."""
     n_rows = indptr.shape[0] - 1
     dim = grads.shape[1]
-    n_c = v.shape[1]
-    out = np.zeros((n_rows, n_c, dim))
     for k in prange(n_rows):
-        for p in range(indptr[k], indptr[k + 1]):
-            j = indices[p]
-            for a in range(n_c):
-                va = v[j, a]
+        if dim == 2:
+            l00 = l01 = l10 = l11 = 0.0
+            for p in range(indptr[k], indptr[k + 1]):
+                j = indices[p]
+                gx = grads[p, 0]
+                gy = grads[p, 1]
+                vx = v[j, 0]
+                vy = v[j, 1]
+                l00 += vx * gx
+                l01 += vx * gy
+                l10 += vy * gx
+                l11 += vy * gy
+            L[k, 0, 0] = l00
+            L[k, 0, 1] = l01
+            L[k, 1, 0] = l10
+            L[k, 1, 1] = l11
+            div[k] = l00 + l11
+        else:
+            acc = np.zeros((3, 3))
+            for p in range(indptr[k], indptr[k + 1]):
+                j = indices[p]
+                for a in range(dim):
+                    va = v[j, a]
+                    for b in range(dim):
+                        acc[a, b] += va * grads[p, b]
+            tr = 0.0
+            for a in range(dim):
+                tr += acc[a, a]
                 for b in range(dim):
-                    out[k, a, b] += va * grads[p, b]
-    return out
+                    L[k, a, b] = acc[a, b]
+            div[k] = tr
 
 
 def _n_blocks() -> int:
@@ -191,7 +219,7 @@ def internal_force(table: ShapeTable, stress: ArrayLike, volumes: ArrayLike) -> 
     d = table.dim
     sig = _per_point("stress", stress, table, (d, d))
     V = _per_point("volumes", volumes, table)
-    return _scatter_stress(table.indptr, table.indices, table.gradients, sig * V[:, None, None], table.n_nodes, _n_blocks())
+    return internal_force_and_mass(table, sig * V[:, None, None], V, want_mass=False)[0]
 
 
 def body_force(table: ShapeTable, body: ArrayLike, volumes: ArrayLike) -> FloatArray:
@@ -216,14 +244,41 @@ def traction_force(boundary_table: ShapeTable, traction: ArrayLike, areas: Array
 def velocity_gradient(table: ShapeTable, velocity: ArrayLike) -> FloatArray:
     """``L_k = Σ_j v_j ⊗ ∇N_j(x_k)``, ``(n_points, dim, dim)`` with ``L[k, a, b] = ∂v_a/∂x_b``."""
     v = _per_node("velocity", velocity, table, (table.dim,))
-    return _gather_gradient(table.indptr, table.indices, table.gradients, v)
+    return velocity_gradient_divergence(table, v)[0]
 
 
 def continuity_rate(table: ShapeTable, velocity: ArrayLike, density: ArrayLike) -> FloatArray:
     """Collocated continuity ``dρ_k/dt = −ρ_k tr ∇v(x_k)``, ``(n_points,)`` in kg/m^d/s."""
     rho = _per_point("density", density, table)
-    L = velocity_gradient(table, velocity)
-    return -rho * np.trace(L, axis1=1, axis2=2)
+    v = _per_node("velocity", velocity, table, (table.dim,))
+    return -rho * velocity_gradient_divergence(table, v)[1]
+
+
+def velocity_gradient_divergence(table: ShapeTable, v: FloatArray, L: FloatArray | None = None,
+                                 div: FloatArray | None = None) -> tuple[FloatArray, FloatArray]:
+    """``L (n_points, d, d)`` and ``∇·v = tr L (n_points,)`` in one gather, without input checks.
+
+    For time-stepping solvers: ``v (n_nodes, d)`` must be C-contiguous float64; ``L`` and
+    ``div`` are reused as output buffers when they have the right shapes.
+    """
+    n, d = table.n_points, table.dim
+    if L is None or L.shape != (n, d, d):
+        L = np.empty((n, d, d))
+    if div is None or div.shape != (n,):
+        div = np.empty(n)
+    _grad_div(table.indptr, table.indices, table.gradients, v, L, div)
+    return L, div
+
+
+def internal_force_and_mass(table: ShapeTable, stress_volume: FloatArray, masses: FloatArray,
+                            want_mass: bool = True) -> tuple[FloatArray, FloatArray]:
+    """Internal force ``f (n_nodes, d)`` from ``stress_volume = σ V (n_points, d, d)`` and the
+    lumped mass ``m (n_nodes,)`` from ``masses (n_points,)`` in one scatter, without input
+    checks (for solvers); ``m`` is zero when ``want_mass`` is False."""
+    out = _force_mass(table.indptr, table.indices, table.values, table.gradients, stress_volume, masses,
+                      table.n_nodes, _n_blocks(), want_mass)
+    d = table.dim
+    return np.ascontiguousarray(out[:, :d]), out[:, d].copy()
 
 
 # --------------------------------------------------------------------------------------

@@ -18,15 +18,12 @@ fallbacks in the last step.
 
 from __future__ import annotations
 
-import json
 import logging
 import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-
-from mlsgalerkin.studies.common import atomic_write
 
 if TYPE_CHECKING:  # pragma: no cover
     from mlsgalerkin.simulation import Simulation
@@ -117,7 +114,7 @@ class RunOutput:
 
     def finish(self, summary: dict) -> None:
         s = self.sim.state
-        if not self.ts.rows or float(self.ts.rows[-1][0] if isinstance(self.ts.rows[-1], (list, tuple)) else self.ts.rows[-1]["time"]) < s.t:
+        if not self.ts.rows or self.ts.rows[-1]["time"] < s.t:
             self.record()
         self.ts.flush()
         if not self.series.frames or self.series.frames[-1][0] < s.t - 1e-12:
@@ -179,15 +176,14 @@ class RunOutput:
         return path
 
     def write_summary(self, summary: dict) -> None:
-        from mlsgalerkin.simulation import _jsonable
-        from mlsgalerkin.studies.common import provenance
+        from mlsgalerkin.studies.common import provenance, write_json
 
         summary = dict(summary)
         try:
             summary["provenance"] = provenance(f"run {self.sim.scene.name}")
         except Exception:  # provenance is best effort (no git in an installed package)
             pass
-        atomic_write(self.dir / "summary.json", json.dumps(_jsonable(summary), indent=2) + "\n")
+        write_json(self.dir / "summary.json", summary)
 
     def timeseries_dict(self) -> dict[str, np.ndarray]:
         from mlsgalerkin.io import read_timeseries

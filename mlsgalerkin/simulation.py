@@ -28,26 +28,24 @@ edge of a splash) is floored at ``M_i/4`` and counted.
 
 from __future__ import annotations
 
-import json
 import logging
 import math
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from mlsgalerkin.approximation.build import evaluate_shape_functions
-from mlsgalerkin.assembly import _n_blocks
-from mlsgalerkin.fluid.bodies import FluidBody, WallBody
-from mlsgalerkin.fluid.effects import STAGES, Effect
-from mlsgalerkin.fluid.kernels import internal_force_and_mass, velocity_gradient_divergence
+from mlsgalerkin.assembly import internal_force_and_mass, velocity_gradient_divergence
+from mlsgalerkin.fluid.effects import STAGES
 from mlsgalerkin.fluid.state import CHECKPOINT_ARRAYS, FluidState
 from mlsgalerkin.kernels import get_kernel
 from mlsgalerkin.neighbors import find_neighbors
 from mlsgalerkin.scene import Scene
+from mlsgalerkin.studies.common import to_jsonable
 
 __all__ = ["Simulation", "SimulationDiverged", "RunResult", "build_state"]
 
@@ -242,8 +240,7 @@ class Simulation:
             t0 = self.timer.add(e.name, t0)
         s.volume = s.M / s.rho
         stress *= s.volume[:, None, None]
-        force, m = internal_force_and_mass(self._table, stress, s.M, _n_blocks(),
-                                           want_mass=self.scene.mass != "particle")
+        force, m = internal_force_and_mass(self._table, stress, s.M, want_mass=self.scene.mass != "particle")
         if self.scene.mass == "particle":
             m = s.M.copy()
         else:
@@ -414,7 +411,7 @@ class Simulation:
             "n_fluid": s.n_fluid, "effects": {e.name: e.state_dict() for e in self.scene.effects},
             "counters": {"fallback_points": self.fallback_points, "fallback_steps": self.fallback_steps,
                          "mass_floored": self.mass_floored, "neighbor_builds": self.neighbor_builds},
-            "parameters": _jsonable(self.scene.parameters),
+            "parameters": to_jsonable(self.scene.parameters),
         }
         return arrays, meta
 
@@ -519,10 +516,10 @@ class Simulation:
         total = sum(self.timer.seconds.values()) or 1.0
         return {
             "scene": self.scene.name,
-            "parameters": _jsonable(self.scene.parameters),
+            "parameters": to_jsonable(self.scene.parameters),
             "particles": {"fluid": s.n_fluid, "wall": s.n_walls, "total": s.n},
             "spacing_m": s.spacing, "h_m": float(s.h[0]) if s.n else None,
-            "approximation": _jsonable(self.scene.approximation.__dict__),
+            "approximation": to_jsonable(self.scene.approximation.__dict__),
             "integrator": self.scene.integrator, "mass": self.scene.mass,
             "effects": [repr(e) for e in self.scene.effects],
             "t_end_s": s.t, "steps": s.step, "steps_this_run": steps, "wall_time_s": wall,
@@ -539,7 +536,7 @@ class Simulation:
                 "kinetic_energy_J": s.kinetic_energy(),
                 "momentum": s.momentum().tolist(),
             },
-            "effect_reports": {e.name: _jsonable(e.summary()) for e in self.scene.effects if e.summary()},
+            "effect_reports": {e.name: to_jsonable(e.summary()) for e in self.scene.effects if e.summary()},
         }
 
 
@@ -556,20 +553,3 @@ def _progress_bar(total: float, start: float, disable: bool):
 
     return tqdm(total=total, initial=start, unit="s", unit_scale=False, desc="simulated time", mininterval=1.0,
                 bar_format="{l_bar}{bar}| {n:.4f}/{total:.4f} s [{elapsed}<{remaining}{postfix}]")
-
-
-def _jsonable(obj):
-    """Convert numpy scalars/arrays and tuples inside ``obj`` to JSON-friendly values."""
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return str(obj)
-    if isinstance(obj, (str, int, float, bool)) or obj is None:
-        return obj
-    return repr(obj)

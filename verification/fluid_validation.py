@@ -23,8 +23,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 from mlsgalerkin.problems import run_problem
 from mlsgalerkin.problems.dam_break import INCH, load_martin_moyce
 from mlsgalerkin.studies.common import atomic_write, csv_text, format_cell, provenance
@@ -158,7 +156,6 @@ def plots(rows: list[dict], out: Path) -> None:
             ax.plot(tz[:, 0], tz[:, 1], "ko" if w > 2 else "kx", ms=5, label=f"Martin & Moyce, a = {w:g} in")
         for r in db:
             ts = read_timeseries(Path(r["run_dir"]) / "timeseries.csv")
-            a = r["results"].get("column_width", A)
             T = ts["time"] * math.sqrt(2 * 9.81 / A)
             ax.plot(T, ts["front_x"] / A, label=f"mlsgalerkin {r['case']}")
         ax.set_xlim(0, 3.5)
@@ -241,7 +238,6 @@ def summary_md(rows: list[dict], quick: bool) -> str:
                   "|---|---:|---:|---:|---:|---:|---:|---|"]
         for r in gc:
             p = r["results"]
-            par = p.get("parameters", {})
             fr = 0.4 * p["head_speed_m_s"] / p["reference_head_speed_m_s"]
             rows_per_depth = p.get("rows_per_depth", float("nan"))
             lines.append(f"| {r['case']} | {rows_per_depth:.0f} | {p['head_speed_m_s']:.4f} | {p['reference_head_speed_m_s']:.4f} | "

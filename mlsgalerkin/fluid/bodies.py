@@ -14,7 +14,7 @@ and velocity are extrapolated from the fluid every step (see :mod:`mlsgalerkin.f
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray

@@ -32,7 +32,6 @@ and modify its arrays in place), and optionally ``check`` (validation before ste
 from __future__ import annotations
 
 import math
-import warnings
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -165,7 +164,6 @@ class TaitPressure(Effect):
         return problems
 
     def setup(self, state: FluidState, scene: "Scene") -> None:
-        f = state.fluid
         self._B_over_rho0 = self.c0**2 / self.gamma  # B = rho0 c0^2/gamma, per particle via s.rho0
         state.c = np.full(state.n, self.c0)
 
@@ -358,8 +356,7 @@ class MonaghanViscosity(Effect):
     def setup(self, state: FluidState, scene: "Scene") -> None:
         from mlsgalerkin.kernels import get_kernel
 
-        self._kernel = scene.approximation.kernel
-        self._kernel_obj = get_kernel(self._kernel)
+        self._kernel = get_kernel(scene.approximation.kernel)
         self._active = np.zeros(state.n, dtype=bool)
         self._active[state.fluid] = True
 
@@ -368,7 +365,7 @@ class MonaghanViscosity(Effect):
         # (monaghan_viscosity_force re-validates every input, ~2.6 ms per call at 1.6e5 particles)
         from mlsgalerkin.fluid.pair_viscosity import _monaghan_kernel
 
-        k = self._kernel_obj
+        k = self._kernel
         f, row_phi = _monaghan_kernel(
             s.x, s.v, s.rho, s.c, s.M, s.h, s.neighbors.indptr, s.neighbors.indices, k.kernel_id,
             float(k.support), float(k.normalisation(s.dim)), float(self.alpha), float(self.beta), self._active,

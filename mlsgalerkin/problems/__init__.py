@@ -11,7 +11,8 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from mlsgalerkin.problems._common import parse_overrides, write_json
+from mlsgalerkin.problems._common import parse_overrides
+from mlsgalerkin.studies.common import write_json
 
 __all__ = ["PROBLEMS", "get_problem", "run_problem"]
 

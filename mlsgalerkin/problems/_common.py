@@ -9,15 +9,13 @@ dict`` (the problem's results: errors against references, measured speeds) and `
 from __future__ import annotations
 
 import dataclasses
-import json
 import logging
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 
-__all__ = ["parse_overrides", "hydrostatic_density", "kth_smallest", "write_json"]
+__all__ = ["parse_overrides", "hydrostatic_density", "kth_smallest"]
 
 logger = logging.getLogger(__name__)
 
@@ -66,10 +64,3 @@ def kth_smallest(a: np.ndarray, k: int) -> float:
         return float("nan")
     k = min(k, a.size - 1)
     return float(np.partition(a, k)[k])
-
-
-def write_json(path: Path, data: dict) -> None:
-    from mlsgalerkin.simulation import _jsonable
-    from mlsgalerkin.studies.common import atomic_write
-
-    atomic_write(path, json.dumps(_jsonable(data), indent=2) + "\n")

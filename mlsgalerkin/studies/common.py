@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import csv
 import io
+import json
+import math
 import os
 import platform
 import subprocess
@@ -33,7 +35,9 @@ __all__ = [
     "csv_text",
     "git_commit",
     "provenance",
+    "to_jsonable",
     "write_csv_rows",
+    "write_json",
 ]
 
 
@@ -175,3 +179,29 @@ def provenance(study: str, mode: str | None = None, extra: dict | None = None) -
     )
     prov.update(extra or {})
     return prov
+
+
+def to_jsonable(v):
+    """``v`` with numpy scalars/arrays and tuples converted for JSON; non-finite floats become
+    ``None`` (JSON has no NaN) and unknown objects their ``repr``."""
+    if isinstance(v, dict):
+        return {str(k): to_jsonable(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [to_jsonable(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return to_jsonable(v.tolist())
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        v = float(v)
+        return v if math.isfinite(v) else None
+    if isinstance(v, str) or v is None:
+        return v
+    return repr(v)
+
+
+def write_json(path: str | Path, data: dict) -> Path:
+    """Atomic, indented JSON of :func:`to_jsonable` ``(data)``."""
+    return atomic_write(path, json.dumps(to_jsonable(data), indent=2, ensure_ascii=False) + "\n")

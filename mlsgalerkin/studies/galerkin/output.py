@@ -10,21 +10,16 @@ from __future__ import annotations
 
 import csv
 import io
-import json
-import math
 import os
 import platform
 from datetime import datetime, timezone
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from mlsgalerkin.studies.common import atomic_write, command_line, format_cell, git_commit
+from mlsgalerkin.studies.common import atomic_write, command_line, format_cell, git_commit, write_json
 
 __all__ = ["atomic_write", "csv_text", "write_json", "provenance", "command_line", "git_commit"]
-
-
 
 
 def _fmt(v: Any) -> str:
@@ -39,26 +34,6 @@ def csv_text(rows: list[dict], columns: list[str]) -> str:
     for r in rows:
         w.writerow([_fmt(r.get(c)) for c in columns])
     return buf.getvalue()
-
-
-def _jsonable(v: Any) -> Any:
-    if isinstance(v, dict):
-        return {str(k): _jsonable(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [_jsonable(x) for x in v]
-    if isinstance(v, (np.integer,)):
-        return int(v)
-    if isinstance(v, (float, np.floating)):
-        v = float(v)
-        return v if math.isfinite(v) else None
-    if isinstance(v, (np.bool_,)):
-        return bool(v)
-    return v
-
-
-def write_json(path: str | Path, data: dict) -> Path:
-    """Atomic, indented JSON (NaN and inf become null)."""
-    return atomic_write(path, json.dumps(_jsonable(data), indent=2, ensure_ascii=False) + "\n")
 
 
 
