@@ -176,7 +176,8 @@ class RunOutput:
         return path
 
     def write_summary(self, summary: dict) -> None:
-        from mlsgalerkin.studies.common import provenance, write_json
+        from mlsgalerkin.io.files import write_json
+        from mlsgalerkin.io.provenance import provenance
 
         summary = dict(summary)
         try:

@@ -45,7 +45,7 @@ from mlsgalerkin.fluid.state import CHECKPOINT_ARRAYS, FluidState
 from mlsgalerkin.kernels import get_kernel
 from mlsgalerkin.neighbors import find_neighbors
 from mlsgalerkin.scene import Scene
-from mlsgalerkin.studies.common import to_jsonable
+from mlsgalerkin.io.files import to_jsonable
 
 __all__ = ["Simulation", "SimulationDiverged", "RunResult", "build_state"]
 

@@ -25,7 +25,8 @@ from pathlib import Path
 
 from mlsgalerkin.problems import run_problem
 from mlsgalerkin.problems.dam_break import INCH, load_martin_moyce
-from mlsgalerkin.studies.common import atomic_write, csv_text, format_cell, provenance
+from mlsgalerkin.io.files import atomic_write, csv_text, format_cell
+from mlsgalerkin.io.provenance import provenance
 
 A = 2.25 * INCH
 

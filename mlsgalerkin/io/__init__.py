@@ -1,6 +1,11 @@
-"""Output of particle simulations: VTU/PVD frames, checkpoints, CSV time series, pictures.
+"""Files: atomic writes, provenance, VTU/PVD frames, checkpoints, CSV time series, pictures.
 
 =====================================  ==================================================
+:mod:`mlsgalerkin.io.files`            :func:`atomic_output`, :func:`atomic_write`,
+                                       :func:`write_json`, :func:`to_jsonable`,
+                                       :func:`csv_text`, :func:`write_csv_rows`
+:mod:`mlsgalerkin.io.provenance`       :func:`provenance`, :func:`git_commit`,
+                                       :func:`command_line`
 :mod:`mlsgalerkin.io.vtk`              :func:`write_vtu`, :func:`read_vtu`,
                                        :class:`PVDSeries` (ParaView ``.pvd`` series)
 :mod:`mlsgalerkin.io.checkpoint`       :func:`save_checkpoint`, :func:`load_checkpoint`,
@@ -11,7 +16,8 @@
 =====================================  ==================================================
 
 Every file is written atomically (temporary file in the same directory, then
-``os.replace``) and nothing is ever pickled. meshio, pyvista and matplotlib are imported only
+``os.replace``) and nothing is ever pickled. This package imports nothing from the solvers or
+the studies. meshio, pyvista and matplotlib are imported only
 when a function needs them.
 """
 
@@ -21,13 +27,22 @@ from mlsgalerkin.io.checkpoint import (
     CHECKPOINT_FORMAT,
     CHECKPOINT_VERSION,
     CheckpointError,
-    atomic_output,
     checkpoint_path,
     latest_checkpoint,
     load_checkpoint,
     prune_checkpoints,
     save_checkpoint,
 )
+from mlsgalerkin.io.files import (
+    atomic_output,
+    atomic_write,
+    csv_text,
+    format_cell,
+    to_jsonable,
+    write_csv_rows,
+    write_json,
+)
+from mlsgalerkin.io.provenance import command_line, git_commit, provenance
 from mlsgalerkin.io.render import (
     offscreen_backend,
     render_animation,
@@ -44,10 +59,16 @@ __all__ = [
     "PVDSeries",
     "TimeSeriesWriter",
     "atomic_output",
+    "atomic_write",
     "checkpoint_path",
+    "command_line",
+    "csv_text",
+    "format_cell",
+    "git_commit",
     "latest_checkpoint",
     "load_checkpoint",
     "offscreen_backend",
+    "provenance",
     "prune_checkpoints",
     "read_pvd",
     "read_timeseries",
@@ -56,5 +77,8 @@ __all__ = [
     "render_snapshot",
     "render_vtu_series",
     "save_checkpoint",
+    "to_jsonable",
+    "write_csv_rows",
+    "write_json",
     "write_vtu",
 ]

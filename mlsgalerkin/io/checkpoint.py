@@ -28,19 +28,18 @@ import json
 import logging
 import os
 import re
-import tempfile
 import zipfile
-from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, Iterator, Mapping
+from typing import Any, Mapping
 
 import numpy as np
+
+from mlsgalerkin.io.files import atomic_output
 
 __all__ = [
     "CHECKPOINT_FORMAT",
     "CHECKPOINT_VERSION",
     "CheckpointError",
-    "atomic_output",
     "checkpoint_path",
     "latest_checkpoint",
     "load_checkpoint",
@@ -62,44 +61,6 @@ _NAME_RE = re.compile(r"^checkpoint_(\d{8,})\.npz$")
 
 class CheckpointError(ValueError):
     """A checkpoint file exists but cannot be used (corrupt, truncated, foreign or too new)."""
-
-
-@contextmanager
-def atomic_output(path: str | Path) -> Iterator[Path]:
-    """Context manager giving a temporary path next to ``path`` for a third-party writer.
-
-    Write the complete file to the yielded temporary path (same directory, so the final
-    ``os.replace`` is atomic); on a normal exit it gets mode ``0o644`` and replaces ``path``.
-    If the body raises, the temporary file is removed and ``path`` is left untouched.
-
-    Parameters
-    ----------
-    path : str or Path
-        The final file. Its directory must exist.
-
-    Yields
-    ------
-    Path
-        The temporary file to write (it exists, empty, when the body starts).
-    """
-    path = Path(path)
-    if not path.parent.is_dir():
-        raise FileNotFoundError(
-            f"cannot write {path}: directory {path.parent} does not exist; create it first"
-        )
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    tmp = Path(tmp_name)
-    try:
-        yield tmp
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            tmp.unlink()
-        except OSError:
-            pass
-        raise
 
 
 # ------------------------------------------------------------------------------------------

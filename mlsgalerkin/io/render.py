@@ -39,7 +39,7 @@ from typing import Sequence
 
 import numpy as np
 
-from mlsgalerkin.studies.common import atomic_write
+from mlsgalerkin.io.files import atomic_write
 
 __all__ = [
     "offscreen_backend",

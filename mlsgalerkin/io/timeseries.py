@@ -1,7 +1,7 @@
 """Scalar time series (energies, forces, probes) as a CSV file rewritten atomically.
 
 :class:`TimeSeriesWriter` keeps the rows in memory and :meth:`~TimeSeriesWriter.flush`
-rewrites the whole file through :func:`~mlsgalerkin.studies.common.atomic_write`, so a reader
+rewrites the whole file through :func:`~mlsgalerkin.io.files.atomic_write`, so a reader
 (or a crash) never sees a partial line. The first line is the header (the column names);
 integers are written as such and floats with ``repr``, which round-trips every double exactly
 (``nan``, ``inf`` and ``-inf`` included); ``None`` is an empty cell, read back as ``nan``.
@@ -21,7 +21,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from mlsgalerkin.studies.common import atomic_write
+from mlsgalerkin.io.files import atomic_write
 
 __all__ = ["TimeSeriesWriter", "format_value", "read_timeseries"]
 

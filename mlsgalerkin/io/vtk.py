@@ -16,7 +16,7 @@ tensor ``(n, d, d)``   ``(n, d*d)``          row-major; ParaView shows 9 as tens
 
 ``bool`` arrays are stored as ``uint8`` (0/1), ``float16`` as ``float32``; other integer and
 float dtypes are stored as they are. Files are written to a temporary name and moved into
-place (:func:`~mlsgalerkin.io.checkpoint.atomic_output`).
+place (:func:`~mlsgalerkin.io.files.atomic_output`).
 
 :class:`PVDSeries` writes ``name_00000.vtu, name_00001.vtu, ...`` and after each frame
 rewrites ``name.pvd``, the ParaView collection that lists every frame with its time (written
@@ -44,8 +44,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from mlsgalerkin.io.checkpoint import atomic_output
-from mlsgalerkin.studies.common import atomic_write
+from mlsgalerkin.io.files import atomic_output, atomic_write
 
 __all__ = ["PVDSeries", "pvd_xml", "read_pvd", "read_vtu", "write_vtu"]
 

@@ -12,7 +12,7 @@ from types import ModuleType
 from typing import Any
 
 from mlsgalerkin.problems._common import parse_overrides
-from mlsgalerkin.studies.common import write_json
+from mlsgalerkin.io.files import write_json
 
 __all__ = ["PROBLEMS", "get_problem", "run_problem"]
 

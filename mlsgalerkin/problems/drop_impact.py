@@ -103,7 +103,7 @@ def snapshot_figure(run_dir, out_png, color_by: str = "speed") -> None:
     import matplotlib.pyplot as plt
 
     from mlsgalerkin.io import read_pvd, read_vtu
-    from mlsgalerkin.studies.common import atomic_write
+    from mlsgalerkin.io.files import atomic_write
 
     frames = read_pvd(run_dir / "particles.pvd")
     k = len(frames)

@@ -17,7 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from mlsgalerkin.studies.common import atomic_write, command_line, format_cell, git_commit, write_json
+from mlsgalerkin.io.files import atomic_write, format_cell, write_json
+from mlsgalerkin.io.provenance import command_line, git_commit
 
 __all__ = ["atomic_write", "csv_text", "write_json", "provenance", "command_line", "git_commit"]
 

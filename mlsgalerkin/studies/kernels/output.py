@@ -5,8 +5,8 @@ from __future__ import annotations
 from typing import Iterator
 
 
-from mlsgalerkin.studies.common import format_cell
-from mlsgalerkin.studies.common import provenance as common_provenance
+from mlsgalerkin.io.files import format_cell
+from mlsgalerkin.io.provenance import provenance as common_provenance
 from mlsgalerkin.studies.kernels.config import StudyConfig
 
 __all__ = ["csv_cells", "provenance"]

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mlsgalerkin.studies.common import atomic_write
+from mlsgalerkin.io.files import atomic_write
 
 logger = logging.getLogger(__name__)
 

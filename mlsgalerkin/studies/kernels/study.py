@@ -7,7 +7,7 @@ import logging
 import time
 from pathlib import Path
 
-from mlsgalerkin.studies.common import atomic_write, write_csv_rows
+from mlsgalerkin.io.files import atomic_write, write_csv_rows
 from mlsgalerkin.studies.kernels.claims import analyse
 from mlsgalerkin.studies.kernels.config import (
     COLUMNS,
