@@ -1,6 +1,7 @@
-"""Command line: ``mlsgalerkin kernels | run PROBLEM | problems | study kernels | study galerkin``.
+"""Command line: ``mlsgalerkin kernels | run PROBLEM|FILE.py | problems | study kernels | study galerkin``.
 
-Library code logs; this module prints.
+Also ``python -m mlsgalerkin ...`` and ``mlsgalerkin --version``. Library code logs; this module
+prints.
 """
 
 from __future__ import annotations
@@ -58,13 +59,14 @@ def _parse_sets(items: list[str]) -> dict[str, str]:
 def _cmd_problems(args: argparse.Namespace) -> int:
     import dataclasses
 
-    from mlsgalerkin.problems import PROBLEMS, get_problem
+    from mlsgalerkin.problem import load_problem, shipped_problems
 
-    for name in PROBLEMS:
-        mod = get_problem(name)
+    for name in shipped_problems():
+        mod = load_problem(name)
         print(f"{name}: {(mod.__doc__ or '').strip().splitlines()[0]}")
         for f in dataclasses.fields(mod.Parameters):
             print(f"    {f.name:<20} = {f.default!r}")
+    print("\nRun one with `mlsgalerkin run NAME`, or your own problem file with `mlsgalerkin run my_case.py`.")
     return 0
 
 
@@ -72,7 +74,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
-    from mlsgalerkin.problems import run_problem
+    from mlsgalerkin.problem import run_problem
     from mlsgalerkin.scene import SceneError
     from mlsgalerkin.simulation import SimulationDiverged
 
@@ -83,24 +85,36 @@ def _cmd_run(args: argparse.Namespace) -> int:
         overrides["t_end"] = args.t_end
     if args.no_gif:
         overrides["gif"] = "false"
-    out = Path(args.out or f"results/{args.problem}")
+    name = Path(args.problem).stem if args.problem.endswith(".py") else args.problem
+    out = Path(args.out or f"results/{name}")
     try:
         result, results = run_problem(args.problem, overrides, out=out, progress=not args.no_progress,
                                       restart="latest" if args.restart else None)
-    except (ValueError, SceneError) as err:
+    except (ValueError, SceneError, FileNotFoundError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
     except SimulationDiverged as err:
         print(f"error: {err}", file=sys.stderr)
+        print(f"the run's summary (with the diagnosis) is in {out / 'summary.json'}", file=sys.stderr)
         return 3
     s = result.summary
-    print(f"{args.problem}: {s['particles']['total']} particles ({s['particles']['fluid']} fluid), "
-          f"{s['steps_this_run']} steps to t = {s['t_end_s']:.4g} s in {s['wall_time_s']:.1f} s "
-          f"({s['particle_steps_per_s']:.3g} particle-steps/s)")
-    print(results.get("headline", json.dumps(results)))
+    fluid = s.get("fluid", {})
+    particles = fluid.get("particles", {})
+    rate = s.get("particle_steps_per_s")
+    print(f"{name}: {particles.get('total', '?')} particles ({particles.get('fluid', '?')} fluid), "
+          f"{s['steps_this_run']} steps to t = {s['t_end_s']:.4g} s in {s['wall_time_s']:.1f} s"
+          + (f" ({rate:.3g} particle-steps/s)" if rate else ""))
+    if results:
+        print(results.get("headline", json.dumps(results)))
     print(f"output: {out}/ (timeseries.csv, particles.pvd, summary.json"
           + (", animation.gif" if (out / "animation.gif").exists() else "") + ")")
     return 0
+
+
+def _version() -> str:
+    from mlsgalerkin import __version__
+
+    return __version__
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -109,6 +123,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Meshfree Galerkin mechanics: kernels, MLS/RKPM shape functions, studies.",
     )
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("kernels", help="list the kernels with support, constants and smoothness")
@@ -118,7 +133,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_problems)
 
     p = sub.add_parser("run", help="run a problem: mlsgalerkin run gravity_current --set depth=0.1 --dx 0.002")
-    p.add_argument("problem", help="hydrostatic, dam_break, gravity_current or drop_impact")
+    p.add_argument("problem", help="a shipped problem (see `mlsgalerkin problems`) or the path of your own "
+                                   "problem file, e.g. my_case.py")
     p.add_argument("--set", action="append", metavar="NAME=VALUE", help="set a problem parameter (repeatable)")
     p.add_argument("--dx", type=float, help="particle spacing (m)")
     p.add_argument("--t-end", type=float, help="end time (s)")

@@ -1,45 +1,90 @@
-"""Weakly compressible Lagrangian fluid on the Galerkin-MLS assembler: bodies, effects,
-equation of state, time-step limits, walls, filters and free-surface detection.
+"""Weakly compressible Lagrangian fluid on the Galerkin-MLS assembler.
+
+=====================================  =======================================================
+module                                 contents
+=====================================  =======================================================
+:mod:`~mlsgalerkin.fluid.bodies`       :class:`FluidBody`, :class:`Phase`, :class:`WallBody`
+                                       (fixed or moving walls), :func:`lattice`, :func:`wall_box`
+:mod:`~mlsgalerkin.fluid.state`        :class:`FluidState`, the flat particle arrays
+:mod:`~mlsgalerkin.fluid.solver`       :class:`FluidSolver`: neighbours, shape functions,
+                                       kinematics, dynamics, time step, checkpoints
+:mod:`~mlsgalerkin.fluid.integrators`  :class:`KickDriftKick`, :class:`PredictorCorrector`
+:mod:`~mlsgalerkin.fluid.effect`       the :class:`Effect` contract and its stages
+:mod:`~mlsgalerkin.fluid.eos`          the Tait equation and :class:`TaitPressure`
+:mod:`~mlsgalerkin.fluid.gravity`      :class:`Gravity`
+:mod:`~mlsgalerkin.fluid.viscosity`    :class:`NewtonianViscosity`, :class:`BulkViscosity`
+:mod:`~mlsgalerkin.fluid.pair_viscosity`  :class:`MonaghanViscosity` and its numba kernel
+:mod:`~mlsgalerkin.fluid.walls`        :class:`Walls` and the wall-state kernel
+:mod:`~mlsgalerkin.fluid.filters`      :class:`DensityFilter` and its kernels
+:mod:`~mlsgalerkin.fluid.free_surface` :class:`FreeSurfaceDetection` and its kernels
+:mod:`~mlsgalerkin.fluid.time_step`    every time-step limit
+:mod:`~mlsgalerkin.fluid.mass`         lumped, particle and consistent mass
+:mod:`~mlsgalerkin.fluid.health`       the watchdog's check of a fluid state
+=====================================  =======================================================
 
 Run a scene with :class:`mlsgalerkin.simulation.Simulation`; ready-made scenes live in
 :mod:`mlsgalerkin.problems`.
 """
 
 from mlsgalerkin.fluid.bodies import FluidBody, Phase, WallBody, lattice, wall_box
-from mlsgalerkin.fluid.effects import (
-    BulkViscosity,
-    DensityFilter,
-    Effect,
-    FreeSurfaceDetection,
-    Gravity,
-    MonaghanViscosity,
-    NewtonianViscosity,
+from mlsgalerkin.fluid.effect import Effect
+from mlsgalerkin.fluid.eos import (
+    MachNumberWarning,
+    TaitEOS,
     TaitPressure,
-    Walls,
+    hydrostatic_density,
+    tait_density,
+    tait_pressure,
+    tait_sound_speed,
+    tait_stored_energy,
 )
-from mlsgalerkin.fluid.eos import MachNumberWarning, TaitEOS
+from mlsgalerkin.fluid.filters import DensityFilter
+from mlsgalerkin.fluid.free_surface import FreeSurfaceDetection
+from mlsgalerkin.fluid.gravity import Gravity
+from mlsgalerkin.fluid.integrators import Integrator, KickDriftKick, PredictorCorrector
+from mlsgalerkin.fluid.pair_viscosity import MonaghanViscosity
+from mlsgalerkin.fluid.solver import FluidSolver
 from mlsgalerkin.fluid.state import FluidState
-from mlsgalerkin.fluid.time_step import acoustic_limit, force_limit, viscous_limit
+from mlsgalerkin.fluid.time_step import (
+    acoustic_limit,
+    bulk_viscosity_limit,
+    force_limit,
+    pair_viscosity_limit,
+    viscous_limit,
+)
+from mlsgalerkin.fluid.viscosity import BulkViscosity, NewtonianViscosity
+from mlsgalerkin.fluid.walls import Walls
 
 __all__ = [
     "BulkViscosity",
     "DensityFilter",
     "Effect",
     "FluidBody",
+    "FluidSolver",
     "FluidState",
     "FreeSurfaceDetection",
     "Gravity",
+    "Integrator",
+    "KickDriftKick",
     "MachNumberWarning",
     "MonaghanViscosity",
     "NewtonianViscosity",
     "Phase",
+    "PredictorCorrector",
     "TaitEOS",
     "TaitPressure",
     "WallBody",
     "Walls",
     "acoustic_limit",
+    "bulk_viscosity_limit",
     "force_limit",
+    "hydrostatic_density",
     "lattice",
+    "pair_viscosity_limit",
+    "tait_density",
+    "tait_pressure",
+    "tait_sound_speed",
+    "tait_stored_energy",
     "viscous_limit",
     "wall_box",
 ]

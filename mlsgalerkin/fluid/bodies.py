@@ -1,5 +1,7 @@
 r"""Bodies of a fluid scene: :class:`FluidBody` (moving particles, one or more phases) and
-:class:`WallBody` (fixed wall particles), plus lattice builders.
+:class:`WallBody` (wall particles, fixed or moving with a prescribed motion), plus lattice
+builders. Both are advanced by :class:`~mlsgalerkin.fluid.solver.FluidSolver`: wall particles
+are nodes of the fluid's approximation.
 
 A particle carries a constant physical mass ``M = ρ_init · Δx^d`` (kg/m^(3-d) per unit depth
 in 2D); its volume follows the density, ``V = M/ρ``. Wall particles are integration points of
@@ -15,11 +17,17 @@ and velocity are extrapolated from the fluid every step (see :mod:`mlsgalerkin.f
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from mlsgalerkin.dynamics import Body
+from mlsgalerkin.motion import Motion
 from mlsgalerkin.neighbors import as_coordinates
+
+#: The solver of fluid and wall bodies (resolved by the run loop; a string avoids an import cycle).
+FLUID_SOLVER = "mlsgalerkin.fluid.solver:FluidSolver"
 
 __all__ = ["Phase", "FluidBody", "WallBody", "lattice", "wall_box"]
 
@@ -58,7 +66,7 @@ def lattice(lower: ArrayLike, upper: ArrayLike, spacing: float) -> NDArray[np.fl
 
 
 @dataclass
-class FluidBody:
+class FluidBody(Body):
     """Fluid particles.
 
     Parameters
@@ -75,6 +83,7 @@ class FluidBody:
         Initial density (e.g. hydrostatic); default the phase reference density.
     """
 
+    solver: ClassVar[str] = FLUID_SOLVER
     name: str
     positions: NDArray[np.float64]
     spacing: float
@@ -135,28 +144,37 @@ class FluidBody:
 
 
 @dataclass
-class WallBody:
-    """Fixed wall particles (several layers), prescribed velocity, outward fluid-side normals.
+class WallBody(Body):
+    """Wall particles (several layers) with fluid-side normals, fixed or moving rigidly.
 
     Parameters
     ----------
     name : str
     positions : (n, d) array, m
+        Positions at ``t = 0`` (the reference configuration of ``motion``).
     spacing : float
         Wall particle spacing (m); each wall particle integrates a ``spacing^d`` volume.
     normals : (n, d) array, optional
         Unit normal pointing from the wall into the fluid; required for free-slip walls.
-    velocity : (d,) array, m/s
-        Prescribed wall velocity (the wall itself does not move in this version).
+    velocity : (d,) array, m/s, optional
+        Tangential velocity of the surface of a wall that stays in place (a belt, a lid
+        driving a cavity); zero by default. Not with ``motion``.
+    motion : :class:`~mlsgalerkin.motion.Motion`, optional
+        Prescribed rigid motion (translation and rotation about a point as functions of time,
+        e.g. :class:`~mlsgalerkin.motion.Oscillation` for a piston wave maker). The wall
+        particles, their velocity, acceleration and normals follow it; the wall pressure sees
+        ``g − a_wall``.
     reference_density : float
         Density given to wall particles with no fluid in reach (kg/m³).
     """
 
+    solver: ClassVar[str] = FLUID_SOLVER
     name: str
     positions: NDArray[np.float64]
     spacing: float
     normals: NDArray[np.float64] | None = None
     velocity: NDArray[np.float64] | None = None
+    motion: Motion | None = None
     reference_density: float = 1000.0
 
     def __post_init__(self) -> None:
@@ -175,6 +193,13 @@ class WallBody:
         v = np.zeros(d) if self.velocity is None else np.asarray(self.velocity, dtype=float)
         if v.shape != (d,):
             raise ValueError(f"wall body {self.name!r}: velocity must be a ({d},) vector")
+        if self.motion is not None:
+            if not isinstance(self.motion, Motion):
+                raise ValueError(f"wall body {self.name!r}: motion must be a mlsgalerkin.motion.Motion "
+                                 f"(PrescribedMotion, Oscillation), got {type(self.motion).__name__}")
+            if np.any(v != 0):
+                raise ValueError(f"wall body {self.name!r}: give either a surface velocity (a wall that "
+                                 "stays in place) or a motion, not both")
         self.velocity = v
 
     @property

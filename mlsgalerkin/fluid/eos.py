@@ -1,11 +1,14 @@
-r"""Tait equation of state for a weakly compressible liquid (seed digest §7.9).
+r"""The Tait equation of state of a weakly compressible liquid, and the :class:`TaitPressure` effect.
 
-.. math:: p = B\left[\left(\frac{\rho}{\rho_0}\right)^{\gamma} - 1\right],
-          \qquad B = \frac{\rho_0 c_0^2}{\gamma},\qquad \gamma = 7,
+.. math:: p = B\left[r^{\gamma} - 1\right],\qquad r = \frac{\rho}{\rho_0},\qquad
+          B = \frac{\rho_0 c_0^2}{\gamma},\qquad \gamma = 7,
 
 so that ``p = 0`` at the reference density (no spurious free-surface pressure) and the sound
-speed at ``ρ0`` is ``c0``. ``c0`` is chosen from the largest expected flow speed so that the
-Mach number ``U_max / c0`` stays at most 0.1 (density fluctuations about 1 %).
+speed at ``ρ0`` is ``c0``; the local sound speed is ``c = c0 r^{(γ−1)/2}``, the inverse
+``ρ(p) = ρ0 (1 + p/B)^{1/γ}`` and the energy stored per unit mass (the work of compression
+from ``ρ0``) ``e(r) = (B/ρ0)[(r^{γ−1} − 1)/(γ−1) + 1/r − 1] ≥ 0`` (Monaghan 1994). ``c0`` is
+chosen from the largest expected flow speed so that the Mach number ``U_max / c0`` stays at most
+0.1 (density fluctuations about 1 %). Every Tait expression of the package is in this module.
 
 >>> eos = TaitEOS.from_max_velocity(rho0=1000.0, u_max=2.0)
 >>> eos.c0, round(eos.B)
@@ -16,17 +19,78 @@ Mach number ``U_max / c0`` stays at most 0.1 (density fluctuations about 1 %).
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["MachNumberWarning", "TaitEOS"]
+from mlsgalerkin.fluid.effect import Effect, check_positive
+from mlsgalerkin.fluid.state import FluidState
+from mlsgalerkin.fluid.time_step import acoustic_limit
+
+if TYPE_CHECKING:  # pragma: no cover
+    from mlsgalerkin.scene import Scene
+
+__all__ = [
+    "MachNumberWarning",
+    "TaitEOS",
+    "TaitPressure",
+    "hydrostatic_density",
+    "tait_density",
+    "tait_pressure",
+    "tait_sound_speed",
+    "tait_stored_energy",
+]
+
+FloatArray = NDArray[np.float64]
 
 
 class MachNumberWarning(UserWarning):
     """The sound speed is too low for the expected flow speed (Mach number above the limit)."""
+
+
+# --------------------------------------------------------------------------------------
+# the equation (functions of the density ratio r = rho/rho0; rho0 scalar or per particle)
+# --------------------------------------------------------------------------------------
+
+
+def tait_pressure(ratio: FloatArray, rho0: ArrayLike, c0: float, gamma: float = 7.0) -> FloatArray:
+    """``p = B (r^γ − 1)`` (Pa) with ``B = (c0²/γ) ρ0`` per particle (``ρ0`` kg/m³, ``c0`` m/s)."""
+    return (c0**2 / gamma * np.asarray(rho0)) * (ratio**gamma - 1.0)
+
+
+def tait_sound_speed(ratio: FloatArray, c0: float, gamma: float = 7.0) -> FloatArray:
+    """Local sound speed ``c = sqrt(dp/dρ) = c0 r^{(γ−1)/2}`` (m/s)."""
+    return c0 * ratio ** (0.5 * (gamma - 1.0))
+
+
+def tait_density(p: ArrayLike, rho0: ArrayLike, c0: float, gamma: float = 7.0) -> FloatArray:
+    """Inverse ``ρ(p) = ρ0 (1 + p/B)^{1/γ}`` (kg/m³), ``B = ρ0 c0²/γ``; raises below the
+    cavitation limit ``p = −B``."""
+    rho0 = np.asarray(rho0, dtype=float)
+    B = rho0 * c0**2 / gamma
+    x = 1.0 + np.asarray(p, dtype=float) / B
+    if np.any(x <= 0):
+        raise ValueError(f"pressure below the Tait cavitation limit -B = {-float(np.min(B)):.6g} Pa")
+    return rho0 * x ** (1.0 / gamma)
+
+
+def hydrostatic_density(rho0: ArrayLike, depth: ArrayLike, g: float, c0: float, overburden: ArrayLike = 0.0,
+                        gamma: float = 7.0) -> FloatArray:
+    """Tait density at the hydrostatic pressure ``p = overburden + ρ0 g depth`` (per particle
+    ``ρ0``, kg/m³; ``depth`` below the free surface, m; ``g`` m/s²): the start of a fluid at rest."""
+    rho0 = np.asarray(rho0, dtype=float)
+    p = overburden + rho0 * g * np.asarray(depth, dtype=float)
+    return tait_density(p, rho0, c0, gamma)
+
+
+def tait_stored_energy(M: FloatArray, ratio: FloatArray, c0: float, gamma: float = 7.0) -> FloatArray:
+    """Energy stored in each particle by compression, ``M (B/ρ0)[(r^{γ−1} − 1)/(γ−1) + 1/r − 1]``
+    (J, per unit depth in 2D; ``M`` kg): zero at ``r = 1`` and positive otherwise."""
+    return M * (c0**2 / gamma) * ((ratio ** (gamma - 1) - 1) / (gamma - 1) + 1 / ratio - 1)
 
 
 @dataclass(frozen=True)
@@ -46,9 +110,7 @@ class TaitEOS:
             raise ValueError(f"TaitEOS: gamma must be >= 1, got {self.gamma!r}")
 
     @classmethod
-    def from_max_velocity(
-        cls, rho0: float, u_max: float, mach: float = 0.1, gamma: float = 7.0
-    ) -> "TaitEOS":
+    def from_max_velocity(cls, rho0: float, u_max: float, mach: float = 0.1, gamma: float = 7.0) -> "TaitEOS":
         """``c0 = u_max / mach``: the sound speed that keeps the Mach number at ``mach``.
 
         For a dam break of height ``H`` use ``u_max = sqrt(2 g H)``.
@@ -62,20 +124,17 @@ class TaitEOS:
         """Stiffness ``B = rho0 c0^2 / gamma`` in Pa."""
         return self.rho0 * self.c0**2 / self.gamma
 
-    def pressure(self, rho: ArrayLike) -> NDArray[np.float64]:
+    def pressure(self, rho: ArrayLike) -> FloatArray:
         """``p(ρ)`` in Pa."""
-        return self.B * ((np.asarray(rho, dtype=float) / self.rho0) ** self.gamma - 1.0)
+        return tait_pressure(np.asarray(rho, dtype=float) / self.rho0, self.rho0, self.c0, self.gamma)
 
-    def density(self, p: ArrayLike) -> NDArray[np.float64]:
+    def density(self, p: ArrayLike) -> FloatArray:
         """Inverse ``ρ(p) = rho0 (1 + p/B)^(1/gamma)`` (hydrostatic initialisation)."""
-        x = 1.0 + np.asarray(p, dtype=float) / self.B
-        if np.any(x <= 0):
-            raise ValueError(f"pressure below the Tait cavitation limit -B = {-self.B:.6g} Pa")
-        return self.rho0 * x ** (1.0 / self.gamma)
+        return tait_density(p, self.rho0, self.c0, self.gamma)
 
-    def sound_speed(self, rho: ArrayLike) -> NDArray[np.float64]:
+    def sound_speed(self, rho: ArrayLike) -> FloatArray:
         """Local ``c = sqrt(dp/dρ) = c0 (ρ/rho0)^((gamma-1)/2)`` in m/s."""
-        return self.c0 * (np.asarray(rho, dtype=float) / self.rho0) ** (0.5 * (self.gamma - 1.0))
+        return tait_sound_speed(np.asarray(rho, dtype=float) / self.rho0, self.c0, self.gamma)
 
     def check_mach(self, u_max: float, limit: float = 0.1) -> float:
         """Mach number ``u_max / c0``; warns with :class:`MachNumberWarning` above ``limit``."""
@@ -89,3 +148,104 @@ class TaitEOS:
                 stacklevel=2,
             )
         return mach
+
+
+# --------------------------------------------------------------------------------------
+# the effect
+# --------------------------------------------------------------------------------------
+
+
+class TaitPressure(Effect):
+    r"""Tait equation of state per phase, ``p = B_φ[(ρ/ρ0_φ)^γ − 1]``, ``B_φ = ρ0_φ c0²/γ``.
+
+    Give ``c0`` (m/s) or ``u_max`` (the expected largest speed; then ``c0 = u_max/mach``).
+    A :class:`MachNumberWarning` is raised when ``u_max/c0 > 0.1``.
+    ``negative_pressure``: ``"allow"`` (default; a tensile-instability diagnostic counts the
+    fluid particles with ``p < 0``), ``"clamp"`` (``p = max(p, 0)``; the density may still
+    drift below ``ρ0``) or ``"cavitate"`` (a liquid that cannot carry tension: the density is
+    floored at ``ρ0``, so ``p ≥ 0`` and a splashing particle's volume never exceeds ``M/ρ0``;
+    the floorings are counted). Provides ``pressure`` and ``sound_speed``. Time-step limit: the
+    acoustic CFL ``cfl · h/(c + |v|)`` (:func:`~mlsgalerkin.fluid.time_step.acoustic_limit`).
+    """
+
+    name = "tait_pressure"
+    stages = ("pressure",)
+    reads = ("density",)
+    provides = ("pressure", "sound_speed")
+    role = "pressure"
+
+    def __init__(self, c0: float | None = None, *, u_max: float | None = None, mach: float = 0.1,
+                 gamma: float = 7.0, cfl: float = 0.4, negative_pressure: str = "allow") -> None:
+        self.c0_arg, self.u_max, self.mach, self.gamma, self.cfl = c0, u_max, mach, gamma, cfl
+        self.negative_pressure = negative_pressure
+        self.c0 = float(c0) if c0 is not None else (u_max / mach if u_max else float("nan"))
+        self.min_pressure = math.inf
+        self.max_negative_fraction = 0.0
+        self.steps_with_negative = 0
+        self.cavitated = 0
+
+    def __repr__(self) -> str:
+        return f"TaitPressure(c0={self.c0:g}, gamma={self.gamma:g})"
+
+    def check(self, scene: "Scene") -> list[str]:
+        problems: list[str] = []
+        if self.c0_arg is None and self.u_max is None:
+            problems.append("TaitPressure: give c0 (sound speed) or u_max (expected largest speed)")
+        else:
+            check_positive("TaitPressure", "c0", self.c0, problems)
+        check_positive("TaitPressure", "cfl", self.cfl, problems)
+        if not self.gamma >= 1:
+            problems.append(f"TaitPressure: gamma must be >= 1, got {self.gamma}")
+        if self.negative_pressure not in ("allow", "clamp", "cavitate"):
+            problems.append("TaitPressure: negative_pressure must be 'allow', 'clamp' or 'cavitate'")
+        if not problems and self.u_max is not None:
+            TaitEOS(1.0, self.c0, self.gamma).check_mach(self.u_max)
+        return problems
+
+    def setup(self, state: FluidState, scene: "Scene") -> None:
+        state.c = np.full(state.n, self.c0)
+
+    def pressure(self, s: FluidState) -> None:
+        f = s.fluid
+        if self.negative_pressure == "cavitate":
+            below = s.rho[f] < s.rho0[f]
+            self.cavitated += int(np.count_nonzero(below))
+            np.maximum(s.rho[f], s.rho0[f], out=s.rho[f])
+        ratio = s.rho[f] / s.rho0[f]
+        p = tait_pressure(ratio, s.rho0[f], self.c0, self.gamma)
+        negative = p < 0.0
+        n_neg = int(np.count_nonzero(negative))
+        if n_neg:
+            self.min_pressure = min(self.min_pressure, float(p.min()))
+            self.steps_with_negative += 1
+            self.max_negative_fraction = max(self.max_negative_fraction, n_neg / max(p.size, 1))
+            if self.negative_pressure == "clamp":
+                np.maximum(p, 0.0, out=p)
+        s.p[f] = p
+        s.c[f] = tait_sound_speed(ratio, self.c0, self.gamma)
+
+    def time_step_limit(self, s: FluidState) -> float:
+        f = s.fluid
+        return acoustic_limit(s.h[f], s.c[f], s.v[f], self.cfl)
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "c0": self.c0, "gamma": self.gamma,
+            "tensile_instability": {
+                "min_pressure_Pa": None if math.isinf(self.min_pressure) else self.min_pressure,
+                "max_fraction_negative": self.max_negative_fraction,
+                "steps_with_negative_pressure": self.steps_with_negative,
+                "mode": self.negative_pressure,
+                "cavitation_floorings": self.cavitated,
+            },
+        }
+
+    def state_dict(self) -> dict[str, Any]:
+        return {"min_pressure": self.min_pressure, "max_negative_fraction": self.max_negative_fraction,
+                "steps_with_negative": self.steps_with_negative, "cavitated": self.cavitated}
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        self.min_pressure = d["min_pressure"]
+        self.max_negative_fraction = d["max_negative_fraction"]
+        self.steps_with_negative = d["steps_with_negative"]
+        self.cavitated = d.get("cavitated", 0)

@@ -71,7 +71,7 @@ in ten thousand, at ±0.25 r_0 about 0.5 % on average (up to 3 % in one sample, 
 discrete median ``N_0`` flips from 12 to 13); the circle test, which has no tuned threshold,
 produced no false surface in these tests and about ten times fewer errors overall (it
 misses about half as many surface particles).
-:func:`free_surface_method_comparison` regenerates the comparison table.
+``verification/free_surface_comparison.py`` regenerates the comparison table.
 
 Both detectors are numba loops, parallel over particles, with numpy references
 (:func:`detect_circle_coverage_reference`, :func:`surface_indicators_reference`).
@@ -93,23 +93,28 @@ True
 from __future__ import annotations
 
 import math
-import time
+from typing import TYPE_CHECKING, Any
 
 import numba
 import numpy as np
 from numba import prange
 from numpy.typing import ArrayLike, NDArray
 
-from mlsgalerkin.neighbors import NeighborTable, as_coordinates, find_neighbors
+from mlsgalerkin.fluid.effect import Effect
+from mlsgalerkin.fluid.state import FluidState
+from mlsgalerkin.neighbors import NeighborTable, as_coordinates
+
+if TYPE_CHECKING:  # pragma: no cover
+    from mlsgalerkin.scene import Scene
 
 __all__ = [
-    "detect_free_surface",
+    "FreeSurfaceDetection",
     "detect_circle_coverage",
     "detect_circle_coverage_reference",
+    "detect_free_surface",
     "detect_neighbour_deficit",
     "surface_indicators",
     "surface_indicators_reference",
-    "free_surface_method_comparison",
 ]
 
 BoolArray = NDArray[np.bool_]
@@ -413,107 +418,49 @@ def detect_free_surface(
 
 
 # --------------------------------------------------------------------------------------
-# test geometries and the method comparison
+# the effect
 # --------------------------------------------------------------------------------------
 
 
-def _lattice_block(n_side: int, hole: int = 0) -> tuple[FloatArray, BoolArray]:
-    """Square lattice ``n_side``² (spacing 1) with an optional centred ``hole``² cavity.
+class FreeSurfaceDetection(Effect):
+    """Flags free-surface particles every ``every`` steps into ``s.extra["free_surface"]``.
 
-    Returns positions and the exact surface: a particle is on the surface iff one of its four
-    lattice (axis) neighbours is missing (the block's outer ring and the cavity's edge rows;
-    the particles diagonal to the cavity corners are interior).
+    ``method="circle"``: the 2D 360-point circle-coverage test (Koh et al. 2012; radius
+    1.05 Δx); ``method="cheap"``: the neighbour-deficit screen (:func:`detect_neighbour_deficit`).
+    The Galerkin weak form needs no surface condition (traction-free is natural); the flags
+    serve output and diagnostics. Provides ``free_surface``.
     """
-    ij = np.stack(np.meshgrid(np.arange(n_side), np.arange(n_side), indexing="ij"), axis=-1)
-    ij = ij.reshape(-1, 2)
-    present = np.ones((n_side + 2, n_side + 2), dtype=bool)
-    present[0, :] = present[-1, :] = present[:, 0] = present[:, -1] = False
-    if hole:
-        lo = (n_side - hole) // 2
-        present[lo + 1 : lo + 1 + hole, lo + 1 : lo + 1 + hole] = False
-    keep = present[ij[:, 0] + 1, ij[:, 1] + 1]
-    ij = ij[keep]
-    a, b = ij[:, 0] + 1, ij[:, 1] + 1
-    exact = ~(present[a - 1, b] & present[a + 1, b] & present[a, b - 1] & present[a, b + 1])
-    return ij.astype(np.float64), exact
 
+    name = "free_surface"
+    stages = ("after_step",)
+    reads = ("positions", "neighbors")
+    provides = ("free_surface",)
 
-def _ring_disc(n_rings: int) -> tuple[FloatArray, BoolArray]:
-    """Disc of concentric rings at radii 0, 1, …, n_rings (spacing ≈ 1); surface = last ring."""
-    pts = [np.zeros((1, 2))]
-    ring = [np.zeros(1, dtype=int)]
-    for k in range(1, n_rings + 1):
-        m = int(round(2 * np.pi * k))
-        t = 2 * np.pi * (np.arange(m) + 0.5 * (k % 2)) / m
-        pts.append(k * np.stack([np.cos(t), np.sin(t)], axis=1))
-        ring.append(np.full(m, k))
-    ring_all = np.concatenate(ring)
-    return np.concatenate(pts), ring_all == n_rings
+    def __init__(self, method: str = "circle", every: int = 10) -> None:
+        self.method, self.every = method, every
+        self.count = 0
 
+    def __repr__(self) -> str:
+        return f"FreeSurfaceDetection(method={self.method!r}, every={self.every})"
 
-def _hexagonal_block(n_side: int) -> tuple[FloatArray, BoolArray]:
-    """Hexagonal lattice, ``n_side`` rows of ``n_side`` (nearest distance 1), odd rows shifted by
-    1/2; exact surface = first and last rows and the first and last particle of every row (on the
-    zigzag sides this includes the recessed particles, which the circle test calls interior)."""
-    k, i = np.meshgrid(np.arange(n_side), np.arange(n_side), indexing="ij")
-    x = np.stack([i + 0.5 * (k % 2), k * np.sqrt(3.0) / 2.0], axis=-1).reshape(-1, 2)
-    k, i = k.ravel(), i.ravel()
-    exact = (k == 0) | (k == n_side - 1) | (i == 0) | (i == n_side - 1)
-    return x, exact
+    def check(self, scene: "Scene") -> list[str]:
+        problems = []
+        if self.method not in ("circle", "cheap"):
+            problems.append(f"FreeSurfaceDetection: method must be 'circle' or 'cheap', got {self.method!r}")
+        if self.method == "circle" and scene.dim != 2:
+            problems.append("FreeSurfaceDetection: the circle-coverage test is 2D; use method='cheap' in 3D")
+        return problems
 
+    def setup(self, state: FluidState, scene: "Scene") -> None:
+        state.extra["free_surface"] = np.zeros(state.n, dtype=bool)
 
-def free_surface_method_comparison(
-    n_side: int = 40, jitter: float = 0.1, seed: int = 0, repeats: int = 5
-) -> list[dict]:
-    """Compare the circle and cheap detectors on four 2D geometries (spacing ``r0 = 1``).
+    def after_step(self, s: FluidState) -> None:
+        if s.step % self.every and s.step > 1:
+            return
+        flags = detect_free_surface(s.x, s.neighbors, s.spacing, method=self.method)
+        flags[s.walls] = False
+        s.extra["free_surface"] = flags
+        self.count = int(np.count_nonzero(flags))
 
-    Cases: a square lattice block ``n_side``²; a disc of concentric rings (``n_side // 2``
-    rings); the block with each particle jittered by ``U(-jitter, jitter) r0`` per coordinate;
-    the block with a square cavity of ``n_side // 4``² particles removed; a hexagonal block.
-    The exact surface is the outer layer (plus the cavity's edge rows). Each row has ``case``,
-    ``n``, ``n_exact``, ``n_circle``, ``n_cheap``, ``circle_errors`` and ``cheap_errors``
-    (misclassified particles against the exact answer), ``agree`` (particles on which the
-    methods agree) and ``circle_us`` / ``cheap_us`` (best-of-``repeats`` wall time per
-    particle in µs, neighbour search excluded; the first call compiles and is not timed).
-    """
-    rng = np.random.default_rng(seed)
-    block, block_exact = _lattice_block(n_side)
-    disc, disc_exact = _ring_disc(n_side // 2)
-    jittered = block + rng.uniform(-jitter, jitter, block.shape)
-    cavity, cavity_exact = _lattice_block(n_side, hole=max(2, n_side // 4))
-    hexagonal, hexagonal_exact = _hexagonal_block(n_side)
-    cases = [
-        ("lattice block", block, block_exact),
-        ("disc (rings)", disc, disc_exact),
-        (f"jittered block ±{jitter:g} r0", jittered, block_exact),
-        ("block with cavity", cavity, cavity_exact),
-        ("hexagonal block (zigzag sides)", hexagonal, hexagonal_exact),
-    ]
-    rows = []
-    for name, x, exact in cases:
-        table = find_neighbors(x, x, radius=2.2)
-        timings = {}
-        flags = {}
-        for method in ("circle", "cheap"):
-            flags[method] = detect_free_surface(x, table, 1.0, method=method)
-            best = np.inf
-            for _ in range(repeats):
-                t0 = time.perf_counter()
-                detect_free_surface(x, table, 1.0, method=method)
-                best = min(best, time.perf_counter() - t0)
-            timings[method] = best / x.shape[0] * 1e6
-        rows.append(
-            {
-                "case": name,
-                "n": int(x.shape[0]),
-                "n_exact": int(exact.sum()),
-                "n_circle": int(flags["circle"].sum()),
-                "n_cheap": int(flags["cheap"].sum()),
-                "circle_errors": int((flags["circle"] != exact).sum()),
-                "cheap_errors": int((flags["cheap"] != exact).sum()),
-                "agree": int((flags["circle"] == flags["cheap"]).sum()),
-                "circle_us": round(float(timings["circle"]), 3),
-                "cheap_us": round(float(timings["cheap"]), 3),
-            }
-        )
-    return rows
+    def summary(self) -> dict[str, Any]:
+        return {"method": self.method, "last_count": self.count}

@@ -1,33 +1,40 @@
-r"""The particle state a fluid simulation advances, as flat struct-of-arrays.
+r"""The particle state the fluid solver advances, as flat struct-of-arrays.
 
-All particles of all bodies live in one set: fluid particles first (``[0, n_fluid)``), then
-wall particles. Every particle is a node of the MLS approximation and an integration point of
-the nodal Galerkin sums. Arrays (``n`` particles, ``d`` dimensions, SI units):
+All particles of a scene's fluid and wall bodies live in one set: fluid particles first
+(``[0, n_fluid)``), then wall particles; ``bodies`` maps each body's name to its slice. Every
+particle is a node of the MLS approximation and an integration point of the nodal Galerkin
+sums. Arrays (``n`` particles, ``n_w`` wall particles, ``d`` dimensions, SI units):
 
-==============  ==========  ===============================================================
-name            shape       meaning
-==============  ==========  ===============================================================
-``x``           (n, d)      positions (m)
-``v``           (n, d)      nodal velocities (m/s); wall rows hold the extrapolated velocity
-``rho``         (n,)        density (kg/m^3); wall rows extrapolated every step
-``M``           (n,)        physical particle mass (kg per unit depth in 2D); constant for fluid
-``h``           (n,)        smoothing length (m)
-``rho0``        (n,)        reference density of the particle's phase (walls: reference)
-``mu``          (n,)        dynamic viscosity (Pa s)
-``phase``       (n,)        phase index (-1 for walls)
-``a``           (n, d)      acceleration from the last force evaluation (m/s^2)
-``drho``        (n,)        continuity rate ``−ρ ∇·v`` from the last evaluation (kg/m^3/s)
-``p``           (n,)        pressure from the last evaluation (Pa)
-==============  ==========  ===============================================================
+=====================  ==========  ========================================================
+name                   shape       meaning
+=====================  ==========  ========================================================
+``x``                  (n, d)      positions (m); wall rows follow the walls' motion
+``v``                  (n, d)      nodal velocities (m/s); wall rows hold the extrapolated velocity
+``rho``                (n,)        density (kg/m^3); wall rows extrapolated every step
+``M``                  (n,)        physical particle mass (kg per unit depth in 2D); constant for fluid
+``h``                  (n,)        smoothing length (m)
+``rho0``               (n,)        reference density of the particle's phase (walls: reference)
+``mu``                 (n,)        dynamic viscosity (Pa s)
+``phase``              (n,)        phase index (-1 for walls)
+``a``                  (n, d)      acceleration from the last force evaluation (m/s^2)
+``drho``               (n,)        continuity rate ``−ρ ∇·v`` from the last evaluation (kg/m^3/s)
+``p``                  (n,)        pressure from the last evaluation (Pa)
+``wall_velocity``      (n_w, d)    velocity of the wall surface at each wall particle (m/s)
+``wall_acceleration``  (n_w, d)    acceleration of the wall at each wall particle (m/s^2)
+``wall_normals``       (n_w, d)    unit normals into the fluid (turn with a rotating wall)
+``gravity``            (d,)        the body-force acceleration (m/s^2), ``None`` without ``Gravity``
+=====================  ==========  ========================================================
 
 Derived per evaluation and not part of a checkpoint: the neighbour and shape tables, the
-velocity gradient ``L (n, d, d)``, the sound speed, stress, force, the mass in use.
+velocity gradient ``L (n, d, d)``, the sound speed, stress, force, the mass in use, and the
+number of fluid particles whose shape functions fell back to a lower order
+(``fallback_count``).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,6 +49,8 @@ CHECKPOINT_ARRAYS = ("x", "v", "rho", "M", "a", "drho", "p", "x_ref")
 class FluidState:
     """Flat particle arrays plus the time-stepping counters (see the module docstring)."""
 
+    #: Name of this system's VTU series (``particles.pvd``).
+    frame_name: ClassVar[str] = "particles"
     x: NDArray[np.float64]
     v: NDArray[np.float64]
     rho: NDArray[np.float64]
@@ -63,6 +72,9 @@ class FluidState:
     drho: NDArray[np.float64] = field(default=None)  # type: ignore[assignment]
     p: NDArray[np.float64] = field(default=None)  # type: ignore[assignment]
     x_ref: NDArray[np.float64] = field(default=None)  # type: ignore[assignment]
+    wall_acceleration: NDArray[np.float64] = field(default=None)  # type: ignore[assignment]
+    gravity: NDArray[np.float64] | None = None
+    approximation_order: int = 1
     # per-evaluation quantities (not checkpointed)
     neighbors: Any = None
     table: Any = None
@@ -72,6 +84,7 @@ class FluidState:
     force: NDArray[np.float64] | None = None
     mass: NDArray[np.float64] | None = None
     volume: NDArray[np.float64] | None = None
+    fallback_count: int = 0
     extra: dict[str, NDArray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -84,6 +97,8 @@ class FluidState:
             self.p = np.zeros(n)
         if self.x_ref is None:
             self.x_ref = self.x.copy()
+        if self.wall_acceleration is None:
+            self.wall_acceleration = np.zeros((n - self.n_fluid, d))
 
     @property
     def n(self) -> int:
@@ -114,6 +129,13 @@ class FluidState:
         # the numba kernels of the next step (measured 3-7x slower steps with per-step probes)
         return 0.5 * float(np.einsum("i,ij,ij->", self.M[f], self.v[f], self.v[f]))
 
+    def potential_energy(self) -> float | None:
+        """``−Σ_f M_f g·x_f`` (J per unit depth in 2D), ``None`` without gravity."""
+        if self.gravity is None:
+            return None
+        f = self.fluid
+        return -float(np.einsum("i,ij,j->", self.M[f], self.x[f], self.gravity))  # no BLAS
+
     def momentum(self) -> NDArray[np.float64]:
         """``Σ_f M_f v_f`` over the fluid particles, ``(d,)``."""
         f = self.fluid
@@ -122,3 +144,45 @@ class FluidState:
     def total_mass(self) -> float:
         """``Σ_f M_f`` (constant by construction)."""
         return float(self.M[self.fluid].sum())
+
+    # ------------------------------------------------------------------ what monitors see
+    def observables(self) -> dict[str, float]:
+        """The built-in time-series columns: kinetic energy, total mass, potential energy
+        (with gravity), momentum, largest speed, density-ratio range, shape-function fallbacks
+        of the last evaluation."""
+        f = self.fluid
+        speed2 = np.einsum("ij,ij->i", self.v[f], self.v[f])
+        ratio = self.rho[f] / self.rho0[f]
+        row: dict[str, float] = {"kinetic_energy": self.kinetic_energy(), "total_mass": self.total_mass()}
+        pe = self.potential_energy()
+        if pe is not None:
+            row["potential_energy"] = pe
+        mom = self.momentum()
+        for a in range(self.dim):
+            row[f"momentum_{'xyz'[a]}"] = float(mom[a])
+        row["max_speed"] = float(np.sqrt(speed2.max())) if speed2.size else 0.0
+        row["min_density_ratio"] = float(ratio.min()) if ratio.size else 1.0
+        row["max_density_ratio"] = float(ratio.max()) if ratio.size else 1.0
+        row["fallback_points"] = int(self.fallback_count)
+        return row
+
+    def frame(self) -> tuple[NDArray[np.float64], dict[str, NDArray]]:
+        """Points ``(n, d)`` and point data of a VTU frame: velocity, pressure, density, density
+        ratio, phase, wall flag, speed, MLS order and the ``extra`` fields."""
+        data = {
+            "velocity": self.v, "pressure": self.p, "density": self.rho, "density_ratio": self.rho / self.rho0,
+            "phase": self.phase.astype(np.int32), "is_wall": (np.arange(self.n) >= self.n_fluid).astype(np.int32),
+            "speed": np.sqrt(np.einsum("ij,ij->i", self.v, self.v)),
+        }
+        if self.table is not None:
+            data["mls_order"] = self.table.order.astype(np.int32)
+        for k, v in self.extra.items():
+            data[k] = np.asarray(v).astype(np.int32) if np.asarray(v).dtype == bool else v
+        return self.x, data
+
+    def health(self, limits: Any) -> dict | None:
+        """``None`` if the fluid is sound, else a diagnosis (:func:`mlsgalerkin.fluid.health.diagnose`)
+        with ``limits.density_ratio`` and ``limits.max_speed`` (a :class:`~mlsgalerkin.monitors.Watchdog`)."""
+        from mlsgalerkin.fluid.health import diagnose
+
+        return diagnose(self, limits.density_ratio, limits.max_speed)

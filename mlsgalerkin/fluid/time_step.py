@@ -1,59 +1,81 @@
-r"""Explicit time-step limits (seed digest §7.11); each returns a scalar in seconds.
+r"""Every explicit time-step limit of the fluid, in one place; each returns seconds.
 
-======================  ===========================================  =======================
-limit                   formula                                      default factor
-======================  ===========================================  =======================
-acoustic (CFL)          ``C h / (c + |v|)``, minimum over particles  ``C = 0.4``
-viscous diffusion       ``C h² / ν``, ``ν = μ/ρ``                    ``C = 0.125``
-force (acceleration)    ``C sqrt(h / |a|)``                          ``C = 0.25``
-======================  ===========================================  =======================
+======================  ==================================================  ==================
+limit                   formula (minimum over the fluid particles)          used by
+======================  ==================================================  ==================
+acoustic (CFL)          ``C h / (c + |v|)``, ``C = 0.4``                    ``TaitPressure``
+viscous diffusion       ``C h² / ν_max``, ``ν = μ/ρ0``, ``C = 0.125``        ``NewtonianViscosity``
+bulk viscosity          ``C h / (a_L c)``, ``C = 0.125`` (diffusion number   ``BulkViscosity``
+                        of ``ν_b = a_L h c``)
+pair viscosity          ``C h / (c + 0.6 (α c + β max φ))``, ``C = 0.4``     ``MonaghanViscosity``
+                        (Monaghan 1992)
+force (acceleration)    ``C sqrt(min h / max |a|)``, ``C = 0.25``           the solver
+======================  ==================================================  ==================
 
-A limit that does not apply (no viscosity, zero acceleration) is ``inf``; a solver takes the
-minimum over the limits its effects supply, times a safety factor, capped by the user.
+A limit that does not apply (no viscosity, zero acceleration, no particles) is ``inf``. The
+solver takes the minimum over the limits of the listed effects and the force limit, times
+``Scene.safety``, capped by ``Scene.dt_max``. The functions take the solver's own arrays and
+do not validate them: a non-finite state gives a NaN limit, and the watchdog, which runs after
+every step, names the particle and the quantity.
 
 >>> import numpy as np
->>> acoustic_limit(h=0.01, c=20.0), round(viscous_limit(h=0.01, nu=1e-6), 12)
-(0.0002, 12.5)
+>>> h = np.full(3, 0.01)
+>>> acoustic_limit(h, np.full(3, 20.0), np.zeros((3, 2)))
+0.0002
+>>> round(viscous_limit(h, np.full(3, 1e-6)), 12)
+12.5
+>>> round(pair_viscosity_limit(np.full(1, 0.012), np.full(1, 20.0), alpha=0.1, beta=0.0, max_phi=0.5), 12)
+0.000226415094
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
-__all__ = ["acoustic_limit", "viscous_limit", "force_limit"]
+__all__ = ["acoustic_limit", "bulk_viscosity_limit", "force_limit", "pair_viscosity_limit", "viscous_limit"]
 
-
-def _positive(name: str, a: ArrayLike) -> np.ndarray:
-    a = np.asarray(a, dtype=float)
-    if not np.all(np.isfinite(a)) or np.any(a <= 0):
-        raise ValueError(f"{name} must be positive and finite")
-    return a
+FloatArray = NDArray[np.float64]
 
 
-def acoustic_limit(h: ArrayLike, c: ArrayLike, velocity: ArrayLike | None = None, factor: float = 0.4) -> float:
-    """``factor * min(h / (c + |v|))``; ``velocity`` is ``(n, dim)`` or omitted."""
-    h, c = _positive("h", h), _positive("c", c)
-    speed = c if velocity is None else c + np.linalg.norm(np.atleast_2d(velocity), axis=-1)
-    return float(factor * np.min(h / speed))
+def acoustic_limit(h: FloatArray, c: FloatArray, v: FloatArray, cfl: float = 0.4) -> float:
+    """``cfl · min(h / (c + |v|))``: ``h, c (n,)`` (m, m/s), ``v (n, d)`` (m/s)."""
+    if h.size == 0:
+        return math.inf
+    speed = c + np.sqrt(np.einsum("ij,ij->i", v, v))
+    return cfl * float(np.min(h / speed))
 
 
-def viscous_limit(h: ArrayLike, nu: ArrayLike, factor: float = 0.125) -> float:
-    """``factor * min(h² / ν)``; ``inf`` where ``ν = 0`` (inviscid)."""
-    h = _positive("h", h)
-    nu = np.asarray(nu, dtype=float)
-    if np.any(nu < 0) or not np.all(np.isfinite(nu)):
-        raise ValueError("kinematic viscosity nu must be non-negative and finite")
-    with np.errstate(divide="ignore"):
-        return float(factor * np.min(np.broadcast_to(h, np.broadcast(h, nu).shape) ** 2 / nu))
+def viscous_limit(h: FloatArray, nu: FloatArray, factor: float = 0.125) -> float:
+    """``factor · min(h²) / max(ν)`` over ``h, ν (n,)`` (m, m²/s); ``inf`` when every ``ν`` is 0."""
+    if not np.any(nu > 0):
+        return math.inf
+    return factor * float(np.min(h**2 / nu.max()))
 
 
-def force_limit(h: ArrayLike, acceleration: ArrayLike, factor: float = 0.25) -> float:
-    """``factor * min(sqrt(h / |a|))``; ``acceleration`` ``(n, dim)`` in m/s²; ``inf`` if all zero."""
-    h = _positive("h", h)
-    a = np.linalg.norm(np.atleast_2d(np.asarray(acceleration, dtype=float)), axis=-1)
-    if not np.all(np.isfinite(a)):
-        k = int(np.flatnonzero(~np.isfinite(a))[0])
-        raise ValueError(f"acceleration is not finite at particle {k}")
-    with np.errstate(divide="ignore"):
-        return float(factor * np.min(np.sqrt(h / a)))
+def bulk_viscosity_limit(h: FloatArray, c: FloatArray, linear: float, factor: float = 0.125) -> float:
+    """``factor · min(h / (a_L c))``: the diffusion limit of the linear bulk viscosity
+    ``ν_b = a_L h c``; ``inf`` for ``a_L = 0``."""
+    if linear <= 0 or h.size == 0:
+        return math.inf
+    return factor * float(np.min(h / (linear * c)))
+
+
+def pair_viscosity_limit(h: FloatArray, c: FloatArray, alpha: float, beta: float, max_phi: float,
+                         factor: float = 0.4) -> float:
+    """Monaghan's viscous-acoustic limit ``factor · min(h / (c + 0.6 (α c + β max φ)))``
+    (Monaghan 1992; ``λ = 0.4``); ``max_phi`` (m/s) from the last pair-viscosity evaluation."""
+    if h.size == 0:
+        return math.inf
+    return float(factor * np.min(h / (c + 0.6 * (alpha * c + beta * float(max_phi)))))
+
+
+def force_limit(h: FloatArray, a: FloatArray, factor: float = 0.25) -> float:
+    """``factor · sqrt(min h / max |a|)`` for ``h (n,)`` (m), ``a (n, d)`` (m/s²); ``inf`` if
+    every acceleration is zero."""
+    amax = float(np.sqrt(np.max(np.einsum("ij,ij->i", a, a)))) if a.shape[0] else 0.0
+    if not amax > 0:
+        return math.inf
+    return factor * math.sqrt(float(h.min()) / amax)

@@ -1,4 +1,5 @@
-r"""Fixed wall particles: the state of the fictitious fluid beyond the wall.
+r"""Wall particles: the state of the fictitious fluid beyond a wall (the :class:`Walls` effect and
+its kernel).
 
 Wall particles are nodes of the MLS approximation *and* integration points of the nodal
 Galerkin sums, so the weak form integrates over the fluid and a fictitious layer beyond the
@@ -23,19 +24,29 @@ weight. The wall-particle velocity that enters the velocity approximation is
 
 A wall particle with no fluid in reach gets ``p = 0``, its reference density and ``v_wall``.
 Wall particles keep the volume ``Δx^d``; their mass ``ρ_w Δx^d`` follows the extrapolated
-density.
+density. A wall with a prescribed motion (:class:`~mlsgalerkin.fluid.bodies.WallBody`
+``motion=``) supplies ``v_wall`` and ``a_w`` per wall particle at each evaluation's time; a
+fixed wall has ``a_w = 0`` and the ``v_wall`` of its body (a moving belt if non-zero).
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
 from numba import prange
 from numpy.typing import NDArray
 
-from mlsgalerkin.kernels import kernel_f_df
+from mlsgalerkin.fluid.bodies import WallBody
+from mlsgalerkin.fluid.effect import Effect
+from mlsgalerkin.fluid.state import FluidState
+from mlsgalerkin.kernels import get_kernel, kernel_f_df
 
-__all__ = ["SLIP_MODES", "extrapolate_wall_state", "extrapolate_wall_state_reference"]
+if TYPE_CHECKING:  # pragma: no cover
+    from mlsgalerkin.scene import Scene
+
+__all__ = ["SLIP_MODES", "Walls", "extrapolate_wall_state", "extrapolate_wall_state_reference"]
 
 SLIP_MODES = {"no_slip": 0, "free_slip": 1, "fixed": 2}
 
@@ -70,7 +81,7 @@ def _extrapolate(
             sp += p[f] * wgt
             sr += rho[f] * wgt
             for a in range(dim):
-                hyd += g_minus_a[a] * rho[f] * (x[w, a] - x[f, a]) * wgt
+                hyd += g_minus_a[t, a] * rho[f] * (x[w, a] - x[f, a]) * wgt
             sv0 += v[f, 0] * wgt
             sv1 += v[f, 1] * wgt
             if dim == 3:
@@ -105,35 +116,38 @@ def _extrapolate(
 def extrapolate_wall_state(
     wall_ids: NDArray[np.int64], indptr: NDArray[np.int64], indices: NDArray[np.int32],
     x: NDArray[np.float64], v: NDArray[np.float64], rho: NDArray[np.float64], p: NDArray[np.float64],
-    h: NDArray[np.float64], is_fluid: NDArray[np.bool_], kernel, gravity: NDArray[np.float64],
+    h: NDArray[np.float64], is_fluid: NDArray[np.bool_], kernel, g_minus_a: NDArray[np.float64],
     wall_velocity: NDArray[np.float64], normals: NDArray[np.float64], slip: str,
     rho_ref: NDArray[np.float64],
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Wall pressure ``(n_w,)`` Pa, density ``(n_w,)`` kg/m³ and velocity ``(n_w, d)`` m/s.
 
     ``wall_ids (n_w,)`` index the wall rows of the CSR neighbour table over all particles;
-    ``x, v, rho, p, h, is_fluid`` are over all particles; ``gravity (d,)`` minus the wall
-    acceleration (zero for fixed walls); ``wall_velocity, normals (n_w, d)``; ``rho_ref (n_w,)``.
+    ``x, v, rho, p, h, is_fluid`` are over all particles; ``g_minus_a`` is the gravity minus
+    the wall's acceleration at each wall particle, ``(n_w, d)`` or ``(d,)`` for all (m/s²;
+    gravity alone for fixed walls); ``wall_velocity, normals (n_w, d)``; ``rho_ref (n_w,)``.
     """
     n_w, dim = wall_ids.shape[0], x.shape[1]
     p_out = np.empty(n_w)
     rho_out = np.empty(n_w)
     v_out = np.empty((n_w, dim))
+    g_minus_a = np.ascontiguousarray(np.broadcast_to(np.asarray(g_minus_a, dtype=float), (n_w, dim)))
     _extrapolate(
         wall_ids, indptr, indices, x, v, rho, p, h, is_fluid, kernel.kernel_id, kernel.support,
-        dim, np.asarray(gravity, dtype=float), wall_velocity, normals, SLIP_MODES[slip], rho_ref,
+        dim, g_minus_a, wall_velocity, normals, SLIP_MODES[slip], rho_ref,
         p_out, rho_out, v_out,
     )
     return p_out, rho_out, v_out
 
 
 def extrapolate_wall_state_reference(
-    wall_ids, indptr, indices, x, v, rho, p, h, is_fluid, kernel, gravity, wall_velocity, normals,
+    wall_ids, indptr, indices, x, v, rho, p, h, is_fluid, kernel, g_minus_a, wall_velocity, normals,
     slip, rho_ref,
 ):
     """Numpy version of :func:`extrapolate_wall_state` (tests)."""
     dim = x.shape[1]
     n_w = len(wall_ids)
+    g_minus_a = np.broadcast_to(np.asarray(g_minus_a, dtype=float), (n_w, dim))
     p_out, rho_out, v_out = np.zeros(n_w), np.zeros(n_w), np.zeros((n_w, dim))
     for t, w in enumerate(wall_ids):
         nb = indices[indptr[w]:indptr[w + 1]]
@@ -142,7 +156,7 @@ def extrapolate_wall_state_reference(
         W = kernel.shape(np.linalg.norm(d, axis=1) / h[nb], dim) if len(nb) else np.zeros(0)
         sw = W.sum()
         if sw > 0:
-            p_out[t] = (W @ p[nb] + np.asarray(gravity) @ ((rho[nb] * W) @ d)) / sw
+            p_out[t] = (W @ p[nb] + g_minus_a[t] @ ((rho[nb] * W) @ d)) / sw
             rho_out[t] = W @ rho[nb] / sw
             vt = W @ v[nb] / sw
         else:
@@ -155,3 +169,64 @@ def extrapolate_wall_state_reference(
         else:
             v_out[t] = wall_velocity[t]
     return p_out, rho_out, v_out
+
+
+class Walls(Effect):
+    """Wall particles of the fluid approximation: extrapolated pressure, density and velocity
+    (module docstring). ``slip`` is ``"free_slip"`` (default), ``"no_slip"`` or ``"fixed"``.
+
+    The hydrostatic term of the wall pressure uses ``state.gravity`` (zero without a listed
+    :class:`~mlsgalerkin.fluid.gravity.Gravity`) minus the acceleration of each wall particle
+    (``state.wall_acceleration``, non-zero for a wall with a prescribed motion).
+    """
+
+    name = "walls"
+    stages = ("kinematics", "boundary")
+    reads = ("velocity", "pressure", "density", "neighbors")
+    provides = ("wall_state",)
+
+    def __init__(self, slip: str = "free_slip") -> None:
+        self.slip = slip
+
+    def __repr__(self) -> str:
+        return f"Walls(slip={self.slip!r})"
+
+    def check(self, scene: "Scene") -> list[str]:
+        problems = []
+        walls = scene.bodies_of(WallBody)
+        if self.slip not in SLIP_MODES:
+            problems.append(f"Walls: slip must be one of {sorted(SLIP_MODES)}, got {self.slip!r}")
+        if not walls:
+            problems.append("Walls: the scene has no WallBody; add one or remove the effect")
+        if self.slip == "free_slip" and any(w.normals is None for w in walls):
+            problems.append("Walls: free_slip needs wall normals (WallBody(normals=...)); "
+                            "wall_box() provides them")
+        return problems
+
+    def setup(self, state: FluidState, scene: "Scene") -> None:
+        self._kernel = get_kernel(scene.approximation.kernel)
+        self._ids = np.arange(state.n_fluid, state.n, dtype=np.int64)
+        self._is_fluid = np.zeros(state.n, dtype=bool)
+        self._is_fluid[state.fluid] = True
+        self._rho_ref = state.rho0[state.walls].copy()
+
+    def _extrapolate(self, s: FluidState):
+        nb = s.neighbors
+        g = s.gravity if s.gravity is not None else np.zeros(s.dim)
+        return extrapolate_wall_state(
+            self._ids, nb.indptr, nb.indices, s.x, s.v, s.rho, s.p, s.h, self._is_fluid, self._kernel,
+            g - s.wall_acceleration, s.wall_velocity, s.wall_normals, self.slip, self._rho_ref,
+        )
+
+    def kinematics(self, s: FluidState) -> None:
+        if s.n_walls:
+            _, _, v_w = self._extrapolate(s)
+            s.v[s.walls] = v_w
+
+    def boundary(self, s: FluidState) -> None:
+        if s.n_walls:
+            p_w, rho_w, _ = self._extrapolate(s)
+            w = s.walls
+            s.p[w] = p_w
+            s.rho[w] = rho_w
+            s.M[w] = rho_w * s.wall_volume

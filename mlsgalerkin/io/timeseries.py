@@ -23,7 +23,7 @@ import numpy as np
 
 from mlsgalerkin.io.files import atomic_write
 
-__all__ = ["TimeSeriesWriter", "format_value", "read_timeseries"]
+__all__ = ["TimeSeriesWriter", "columns_of", "format_value", "read_timeseries"]
 
 logger = logging.getLogger(__name__)
 
@@ -91,6 +91,11 @@ def read_timeseries(path: str | Path) -> dict[str, np.ndarray]:
         ``float64`` (empty cells are ``nan``).
     """
     header, rows = _read_csv(Path(path))
+    return columns_of(header, rows)
+
+
+def columns_of(header: Sequence[str], rows: Sequence[Sequence[Number | None]]) -> dict[str, np.ndarray]:
+    """Rows of numbers as one array per column, typed as :func:`read_timeseries` does."""
     out: dict[str, np.ndarray] = {}
     for j, name in enumerate(header):
         col = [r[j] for r in rows]

@@ -1,14 +1,14 @@
-r"""Gravity current (lock exchange) of seed 001 §4 (seed digest §9.1).
+r"""Gravity current (lock exchange) of Cueto-Felgueroso et al. (2005).
 
 A 2D tank of depth ``D`` holds light fluid (``rho_light``) left of a lock at mid-length and
 heavy fluid (``rho_heavy``) right of it; the lock is removed at ``t = 0`` and the heavy fluid
 runs under the light one towards the left wall. Reference head speed (Rottman & Simpson 1983,
-as quoted by the seed):
+as quoted by Cueto-Felgueroso et al. 2005):
 
 .. math:: v_h \approx 0.4 \sqrt{g D \,\Delta\rho/\rho_0},\qquad \rho_0 = \rho_{light},
 
-0.217 m/s for ``D = 0.06`` m and ``Δρ/ρ0 = 0.5`` (the seed's simulation gave about 0.2 m/s).
-The tank length (0.34 m at the seed's 5100 particles with ``Δx = 2`` mm, 30 × 170), the rigid
+0.217 m/s for ``D = 0.06`` m and ``Δρ/ρ0 = 0.5`` (their simulation gave about 0.2 m/s).
+The tank length (0.34 m at their 5100 particles with ``Δx = 2`` mm, 30 × 170), the rigid
 lid on top, free-slip walls and ``c0 = 10 m/s`` (ten times the long-wave speed
 ``sqrt(g D) = 0.77`` m/s) are this reproduction's choices.
 
@@ -33,9 +33,8 @@ import numpy as np
 
 from mlsgalerkin.fluid import (
     DensityFilter, FluidBody, Gravity, MonaghanViscosity, NewtonianViscosity, Phase, TaitPressure,
-    Walls, wall_box,
+    Walls, hydrostatic_density, wall_box,
 )
-from mlsgalerkin.problems._common import hydrostatic_density, kth_smallest
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
 
 __all__ = ["Parameters", "make_scene", "analyse", "reference_head_speed", "SMOKE"]
@@ -75,7 +74,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     x, y = body.positions[:, 0], body.positions[:, 1]
     body.phase[:] = (x > 0.5 * p.length).astype(np.int64)
     rho0 = body.reference_density
-    body.density[:] = hydrostatic_density(p.c0, rho0, p.depth - y, p.g)
+    body.density[:] = hydrostatic_density(rho0, p.depth - y, p.g, p.c0)
     top = p.depth if p.lid else 1.5 * p.depth
     walls = wall_box((0.0, 0.0), (p.length, top), p.dx, layers=3, open_top=not p.lid,
                      reference_density=p.rho_light)
@@ -86,7 +85,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     n_fluid = body.n
     half = 0.5 * p.depth
 
-    def head_x(s) -> float:
+    def head_x(state) -> float:
+        s = state.fluid
         f = slice(0, n_fluid)
         sel = (s.phase[f] == 1) & (s.x[f, 1] < half)
         return kth_smallest(s.x[f][sel, 0], 2) - 0.5 * p.dx
@@ -98,6 +98,14 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
         probes=[Probe("head_x", head_x)],
         parameters=dict(p.__dict__),
     )
+
+
+def kth_smallest(a: np.ndarray, k: int) -> float:
+    """The ``k``-th smallest value (0-based): a front position robust to ``k`` stray particles."""
+    if a.size == 0:
+        return float("nan")
+    k = min(k, a.size - 1)
+    return float(np.partition(a, k)[k])
 
 
 def head_speed(t: np.ndarray, head_x: np.ndarray, lock_x: float, window: tuple[float, float] = (0.2, 0.8)) -> dict:

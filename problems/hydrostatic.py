@@ -15,8 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mlsgalerkin.fluid import DensityFilter, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, wall_box
-from mlsgalerkin.problems._common import hydrostatic_density
+from mlsgalerkin.fluid import (
+    DensityFilter, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, hydrostatic_density, wall_box,
+)
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
 
 __all__ = ["Parameters", "make_scene", "analyse", "SMOKE"]
@@ -44,17 +45,18 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     c0 = p.c0_factor * math.sqrt(2.0 * p.g * p.depth)
     water = FluidBody.block("water", (0.0, 0.0), (p.width, p.depth), p.dx, [Phase("water", p.rho)])
     y = water.positions[:, 1]
-    water.density[:] = hydrostatic_density(c0, np.full(water.n, p.rho), p.depth - y, p.g)
+    water.density[:] = hydrostatic_density(np.full(water.n, p.rho), p.depth - y, p.g, c0)
     walls = wall_box((0.0, 0.0), (p.width, 1.5 * p.depth), p.dx, layers=3, reference_density=p.rho)
     n = water.n
     scale = p.rho * p.g * p.depth
 
-    def pressure_rms_error(s) -> float:
+    def pressure_rms_error(state) -> float:
+        s = state.fluid
         exact = p.rho * p.g * (p.depth - s.x[:n, 1])
         return float(np.sqrt(np.mean((s.p[:n] - exact) ** 2)) / scale)
 
-    def wall_crossings(s) -> float:
-        x = s.x[:n]
+    def wall_crossings(state) -> float:
+        x = state.fluid.x[:n]
         out = (x[:, 0] < 0) | (x[:, 0] > p.width) | (x[:, 1] < 0)
         return float(np.count_nonzero(out))
 

@@ -6,8 +6,8 @@ dimensionless variables of the experiment,
 
 .. math:: Z = z/a,\qquad T = t\sqrt{2g/a},
 
-with the digitised data in ``shared/reference/data/martin_moyce_1952.csv`` (both column widths,
-2.25 in and 1.125 in) up to ``T = 3``. The front is the largest ``x`` of the fluid particles
+with the digitised data shipped as ``mlsgalerkin/data/martin_moyce_1952.csv`` (both column
+widths, 2.25 in and 1.125 in) up to ``T = 3``. The front is the largest ``x`` of the fluid particles
 plus half a spacing (the particle's own cell). The tank is ``5.5 a`` long (the front reaches
 ``Z ≈ 4.2`` at ``T = 3.3``), with free-slip walls; ``c0 = 10 sqrt(2 g h)``.
 """
@@ -20,10 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
+from mlsgalerkin.data import reference_columns
 from mlsgalerkin.fluid import (
-    DensityFilter, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, wall_box,
+    DensityFilter, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, hydrostatic_density, wall_box,
 )
-from mlsgalerkin.problems._common import hydrostatic_density
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
 
 __all__ = ["Parameters", "make_scene", "analyse", "load_martin_moyce", "SMOKE"]
@@ -52,14 +52,14 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     height = 2.0 * a
     c0 = p.c0_factor * math.sqrt(2.0 * p.g * height)
     water = FluidBody.block("water", (0.0, 0.0), (a, height), p.dx, [Phase("water", p.rho)])
-    water.density[:] = hydrostatic_density(c0, np.full(water.n, p.rho), height - water.positions[:, 1], p.g)
+    water.density[:] = hydrostatic_density(np.full(water.n, p.rho), height - water.positions[:, 1], p.g, c0)
     walls = wall_box((0.0, 0.0), (p.tank_length_factor * a, 1.4 * height), p.dx, layers=3, reference_density=p.rho)
     effects = [TaitPressure(c0, u_max=math.sqrt(2.0 * p.g * height)), Gravity((0.0, -p.g)), Walls("free_slip"),
                MonaghanViscosity(p.alpha), DensityFilter(20)]
     n_fluid = water.n
 
-    def front_x(s) -> float:
-        return float(s.x[:n_fluid, 0].max()) + 0.5 * p.dx
+    def front_x(state) -> float:
+        return float(state.fluid.x[:n_fluid, 0].max()) + 0.5 * p.dx
 
     return Scene(
         [water, walls], effects, t_end=p.t_end, name="dam_break",
@@ -71,36 +71,20 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
 
 
 def load_martin_moyce(path: str | Path | None = None) -> dict[float, np.ndarray]:
-    """Martin & Moyce data by column width (inches): ``{width: array (k, 2) of (T, Z)}``."""
-    if path is None:
-        path = _shared_data("martin_moyce_1952.csv")
+    """Martin & Moyce data by column width (inches): ``{width: array (k, 2) of (T, Z)}``
+    (the shipped file, or the CSV at ``path``)."""
+    cols = reference_columns("martin_moyce_1952.csv") if path is None else _read_columns(Path(path))
+    widths = cols["column_width_in"]
+    return {float(w): np.column_stack([cols["T"][widths == w], cols["Z"][widths == w]])
+            for w in dict.fromkeys(widths.tolist())}  # in the file's order
+
+
+def _read_columns(path: Path) -> dict[str, np.ndarray]:
     import csv
 
-    lines = [ln for ln in Path(path).read_text().splitlines() if ln.strip() and not ln.startswith("#")]
-    reader = csv.DictReader(lines)
-    out: dict[float, list] = {}
-    for row in reader:
-        out.setdefault(float(row["column_width_in"]), []).append((float(row["T"]), float(row["Z"])))
-    return {w: np.array(v) for w, v in out.items()}
-
-
-def _shared_data(name: str) -> Path:
-    """Find ``shared/reference/data/name`` beside the repository (or via MLSGALERKIN_SHARED)."""
-    import os
-
-    env = os.environ.get("MLSGALERKIN_SHARED")
-    candidates = [Path(env) / "reference" / "data" / name] if env else []
-    here = Path(__file__).resolve()
-    for parent in here.parents:
-        candidates.append(parent / "shared" / "reference" / "data" / name)
-        candidates.append(parent.parent / "shared" / "reference" / "data" / name)
-    for c in candidates:
-        if c.is_file():
-            return c
-    raise FileNotFoundError(
-        f"reference data {name} not found; put the shared/ folder beside the repository or set "
-        "MLSGALERKIN_SHARED to its path"
-    )
+    lines = [ln for ln in path.read_text().splitlines() if ln.strip() and not ln.startswith("#")]
+    rows = list(csv.reader(lines))
+    return {h: np.array([float(r[k]) for r in rows[1:]]) for k, h in enumerate(rows[0])}
 
 
 def analyse(result, p: Parameters, t_max: float = 3.0) -> dict:

@@ -1,0 +1,177 @@
+r"""The contracts the run loop drives: bodies, their solvers, interactions between bodies.
+
+:class:`~mlsgalerkin.simulation.Simulation` knows no physics. It groups the scene's bodies by
+the solver that advances them (every :class:`Body` names its solver class), and per time step
+
+1. asks every solver for its stable time step and takes the minimum;
+2. calls :meth:`Solver.begin_step` on every solver: each moves its bodies to ``t + Δt``
+   (a kick-drift for the fluid; a sub-cycled structure advances completely with the forces
+   of the last exchange);
+3. calls :meth:`Interaction.exchange` on every interaction: it reads both bodies'
+   :class:`Surface` at ``t + Δt`` and adds equal and opposite forces to both
+   (:meth:`Solver.add_surface_forces`);
+4. calls :meth:`Solver.end_step` on every solver: each evaluates its forces at ``t + Δt``,
+   including what the interactions added, and completes the step (the final kick);
+5. hands the :class:`~mlsgalerkin.simulation.RunState` to the monitors.
+
+A body kind that should take part implements a :class:`Body` (data: geometry, material,
+initial state) and a :class:`Solver` (state and how it advances, with its own integrator and
+sub-steps). Nothing in the loop changes. See ``docs/architecture.md``.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+if TYPE_CHECKING:  # pragma: no cover
+    from mlsgalerkin.scene import Scene
+
+__all__ = ["Body", "Interaction", "Solver", "Surface"]
+
+
+class Body:
+    """A named part of a scene, advanced by the solver class :attr:`solver`.
+
+    Subclasses are plain data (dataclasses): geometry, material, initial state. All bodies of
+    one solver class in a scene are handed to one instance of that class.
+    """
+
+    #: The :class:`Solver` subclass that advances bodies of this kind.
+    solver: ClassVar[type["Solver"]]
+    name: str
+
+    @property
+    def dim(self) -> int:  # pragma: no cover - every body defines it
+        raise NotImplementedError
+
+
+@dataclass
+class Surface:
+    """The touchable boundary of a body at the current time, for an :class:`Interaction`.
+
+    Attributes
+    ----------
+    body : str
+        Name of the body.
+    positions, velocities : (n, d) float arrays
+        Surface nodes (m, m/s).
+    segments : (n_seg, d) int array
+        Node indices of each master segment (2D: the two end nodes, ordered so that the
+        outward normal is the segment direction turned clockwise; 3D: triangles,
+        counter-clockwise seen from outside). Empty ``(0, d)`` for a point set (slave nodes).
+    masses : (n,) float array
+        Nodal masses (kg, per unit depth in 2D), for penalty stiffness and time-step limits.
+    """
+
+    body: str
+    positions: NDArray[np.float64]
+    velocities: NDArray[np.float64]
+    segments: NDArray[np.int64] = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
+    masses: NDArray[np.float64] | None = None
+
+
+class Solver(ABC):
+    """Owns the state of a group of bodies and advances it (see the module docstring).
+
+    Parameters
+    ----------
+    bodies : list of Body
+        The scene's bodies of this solver's kind, in scene order.
+    scene : Scene
+        The whole scene (for the effects and options that apply to these bodies).
+    """
+
+    #: Key of this solver's state in :attr:`RunState.systems` and of its part of the summary.
+    key: ClassVar[str]
+    #: Whether the scene's ``effects`` are this solver's (the fluid's are).
+    takes_effects: ClassVar[bool] = False
+
+    @classmethod
+    def problems(cls, bodies: list[Body], scene: "Scene") -> list[str]:
+        """Every problem with these bodies in ``scene`` (called before any work; empty if none)."""
+        return []
+
+    @abstractmethod
+    def __init__(self, bodies: list[Body], scene: "Scene") -> None: ...
+
+    @property
+    @abstractmethod
+    def state(self) -> Any:
+        """This solver's state (what monitors and probes see)."""
+
+    @abstractmethod
+    def start(self) -> None:
+        """First force evaluation at the initial time (rates for the first step)."""
+
+    @abstractmethod
+    def stable_time_step(self) -> float:
+        """Largest time step (s) this solver can take as one outer step (after sub-cycling)."""
+
+    @abstractmethod
+    def begin_step(self, t: float, dt: float) -> None:
+        """Move the bodies from ``t`` to ``t + dt`` (positions and what depends only on them)."""
+
+    @abstractmethod
+    def end_step(self, t: float, dt: float) -> None:
+        """Evaluate the forces at ``t + dt`` (with the interaction forces) and finish the step."""
+
+    def surface(self, body: str) -> Surface:
+        """The current :class:`Surface` of ``body`` (for interactions)."""
+        raise NotImplementedError(f"{type(self).__name__} exposes no surface for body {body!r}")
+
+    def add_surface_forces(self, body: str, forces: NDArray[np.float64]) -> None:
+        """Add ``forces (n, d)`` (N, per unit depth in 2D) on the surface nodes of ``body``,
+        to be used by the next :meth:`end_step`."""
+        raise NotImplementedError(f"{type(self).__name__} accepts no surface forces for body {body!r}")
+
+    def clear_surface_forces(self) -> None:
+        """Forget the forces of the last exchange (called before each exchange)."""
+
+    @abstractmethod
+    def checkpoint(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """Arrays and JSON metadata from which :meth:`restore` continues bit for bit."""
+
+    @abstractmethod
+    def restore(self, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> None:
+        """Load what :meth:`checkpoint` returned (into a solver built from the same scene)."""
+
+    @abstractmethod
+    def summary(self) -> dict[str, Any]:
+        """Sizes, settings, time per stage and diagnostics for ``summary.json``."""
+
+
+class Interaction(ABC):
+    """Exchanges forces between the surfaces of two bodies once per step (between
+    :meth:`Solver.begin_step` and :meth:`Solver.end_step`).
+
+    Subclasses name the two bodies (``first``, ``second``), read both
+    :meth:`Solver.surface` at ``t + Δt``, and add equal and opposite forces with
+    :meth:`Solver.add_surface_forces`; they may limit the time step.
+    """
+
+    name: str = "interaction"
+    first: str
+    second: str
+
+    def problems(self, scene: "Scene") -> list[str]:
+        """Every problem with this interaction in ``scene`` (empty if none)."""
+        names = {b.name for b in scene.bodies}
+        return [f"interaction {self.name!r}: no body named {b!r}" for b in (self.first, self.second)
+                if b not in names]
+
+    @abstractmethod
+    def exchange(self, t: float, first: Solver, second: Solver) -> None:
+        """Compute the forces at time ``t`` and add them to both bodies."""
+
+    def stable_time_step(self) -> float:
+        """Largest stable time step this interaction allows (s); ``inf`` if none."""
+        return float("inf")
+
+    def summary(self) -> dict[str, Any]:
+        """Diagnostics for ``summary.json``."""
+        return {}

@@ -1,0 +1,110 @@
+r"""The :class:`Effect` contract: the units of physics a fluid scene lists. Nothing unlisted runs.
+
+An effect declares the quantities it ``reads`` and ``provides`` and takes part in some of the
+stages of a force evaluation, called in this order by the
+:class:`~mlsgalerkin.fluid.solver.FluidSolver`:
+
+============  ===========================================================================
+stage         what happens
+============  ===========================================================================
+kinematics    wall-particle velocities (before the velocity gradient is formed)
+(solver)      velocity gradient ``L_k = Σ_j v_j ⊗ ∇N_j(x_k)``, continuity ``ρ̇ = −ρ tr L``
+pressure      the pressure model: ``p``, sound speed ``c`` (exactly one effect)
+boundary      wall-particle pressure and density
+(solver)      stress ``σ = −p I``
+stress        added stresses: Newtonian viscosity, bulk artificial viscosity
+(solver)      ``V = M/ρ``, mass, internal force ``f_i = −Σ_k σ_k ∇N_i(x_k) V_k``, forces
+              added by interactions
+force         added nodal forces: gravity ``m_i g``, Monaghan pair viscosity
+(solver)      acceleration ``a = f/m`` of the fluid particles
+after_step    density re-initialisation, free-surface detection (every few steps)
+============  ===========================================================================
+
+Effects talk to each other only through the :class:`~mlsgalerkin.fluid.state.FluidState`:
+an effect that provides a quantity writes it into the state in :meth:`Effect.setup` or a
+stage (``Gravity`` sets ``state.gravity``, which the wall pressure reads), and validation
+checks that every name an effect ``reads`` is provided by the solver or a listed effect.
+Each effect supplies its own time-step limit (the formulas are in
+:mod:`mlsgalerkin.fluid.time_step`); the solver takes the minimum. The solver provides
+:data:`SOLVER_QUANTITIES`.
+
+Writing a new effect: subclass :class:`Effect`, set ``name``, ``stages``, ``reads`` and
+``provides``, implement the stage methods (they receive the state and modify its arrays in
+place), and optionally ``check`` (validation before step 1), ``setup``, ``time_step_limit``,
+``summary``, ``state_dict``/``load_state_dict``. See ``docs/howto/write_a_scene_and_an_effect.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from mlsgalerkin.fluid.state import FluidState
+
+if TYPE_CHECKING:  # pragma: no cover
+    from mlsgalerkin.scene import Scene
+
+__all__ = ["SOLVER_QUANTITIES", "STAGES", "Effect", "check_nonnegative", "check_positive"]
+
+STAGES = ("kinematics", "pressure", "boundary", "stress", "force", "after_step")
+SOLVER_QUANTITIES = frozenset({
+    "positions", "velocity", "density", "mass", "volume", "velocity_gradient",
+    "shape_functions", "neighbors", "continuity_rate",
+})
+
+
+class Effect:
+    """Base class of a unit of physics (see the module docstring)."""
+
+    name: str = "effect"
+    stages: tuple[str, ...] = ()
+    reads: tuple[str, ...] = ()
+    provides: tuple[str, ...] = ()
+    role: str = "other"  # "pressure" for the pressure model (exactly one per scene)
+
+    def check(self, scene: "Scene") -> list[str]:
+        """Problems with this effect in ``scene`` (empty if none); called before step 1."""
+        return []
+
+    def setup(self, state: FluidState, scene: "Scene") -> None:
+        """Precompute what the effect needs once the particle state exists; write what it
+        ``provides`` into the state."""
+
+    def kinematics(self, s: FluidState) -> None: ...
+    def pressure(self, s: FluidState) -> None: ...
+    def boundary(self, s: FluidState) -> None: ...
+    def stress(self, s: FluidState) -> None: ...
+    def force(self, s: FluidState) -> None: ...
+    def after_step(self, s: FluidState) -> None: ...
+
+    def time_step_limit(self, s: FluidState) -> float:
+        """Largest stable time step this effect allows (s); ``inf`` if it sets none."""
+        return math.inf
+
+    def summary(self) -> dict[str, Any]:
+        """Diagnostics for ``summary.json`` (JSON-serialisable)."""
+        return {}
+
+    def state_dict(self) -> dict[str, Any]:
+        """Counters to checkpoint (JSON-serialisable) so a restart continues bit for bit."""
+        return {}
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        """Restore what :meth:`state_dict` returned."""
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
+
+def check_positive(owner: str, name: str, value: float, problems: list[str]) -> None:
+    """Append a problem unless ``value`` is finite and ``> 0``."""
+    if not (np.isfinite(value) and value > 0):
+        problems.append(f"{owner}: {name} must be positive, got {value!r}")
+
+
+def check_nonnegative(owner: str, name: str, value: float, problems: list[str]) -> None:
+    """Append a problem unless ``value`` is finite and ``>= 0``."""
+    if not (np.isfinite(value) and value >= 0):
+        problems.append(f"{owner}: {name} must be >= 0, got {value!r}")

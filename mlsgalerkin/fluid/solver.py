@@ -1,0 +1,491 @@
+r"""The fluid solver: advances the fluid and wall particles of a scene.
+
+One force evaluation (``docs/theory/galerkin_fluid.md``) is split in two so the integrator can
+advance the density between them:
+
+1. :meth:`FluidSolver.kinematics` — neighbours (rebuilt with a skin), MLS/RKPM shape functions
+   and gradients at every particle, wall velocities, ``L_k = Σ_j v_j ⊗ ∇N_j(x_k)``,
+   collocated continuity ``ρ̇_k = −ρ_k tr L_k``;
+2. :meth:`FluidSolver.dynamics` — pressure, wall state, stress, ``V = M/ρ``, mass, internal
+   force ``f_i = −Σ_k σ_k ∇N_i(x_k) V_k`` by the Galerkin scatter, the forces of interactions,
+   the listed forces, ``a = f/m``.
+
+The time integrator (:mod:`mlsgalerkin.fluid.integrators`) is chosen once from
+``Scene.integrator``; the mass option (:mod:`mlsgalerkin.fluid.mass`) from ``Scene.mass``.
+Walls with a prescribed motion are moved to each evaluation's time before its kinematics.
+Only the listed effects are ever called: each stage calls the effects that declared it.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from mlsgalerkin.approximation.build import evaluate_shape_functions
+from mlsgalerkin.assembly import internal_force_and_mass, velocity_gradient_divergence
+from mlsgalerkin.dynamics import Solver, Surface
+from mlsgalerkin.fluid.bodies import FluidBody, WallBody
+from mlsgalerkin.fluid.effect import SOLVER_QUANTITIES, STAGES, Effect
+from mlsgalerkin.fluid.integrators import make_integrator
+from mlsgalerkin.fluid.mass import (
+    MASS_OPTIONS,
+    consistent_acceleration,
+    floor_lumped_mass,
+    warn_consistent_unconverged,
+)
+from mlsgalerkin.fluid.state import CHECKPOINT_ARRAYS, FluidState
+from mlsgalerkin.fluid.time_step import force_limit
+from mlsgalerkin.io.files import to_jsonable
+from mlsgalerkin.kernels import get_kernel
+from mlsgalerkin.neighbors import find_neighbors
+
+if TYPE_CHECKING:  # pragma: no cover
+    from mlsgalerkin.scene import Scene
+
+__all__ = ["FluidSolver", "StageTimer", "build_state"]
+
+logger = logging.getLogger(__name__)
+
+
+class StageTimer:
+    """Wall time per named stage (s), accumulated over a run."""
+
+    def __init__(self) -> None:
+        self.seconds: dict[str, float] = {}
+
+    def add(self, name: str, t0: float) -> float:
+        """Add ``now − t0`` to ``name``; returns now (the start of the next stage)."""
+        t1 = time.perf_counter()
+        self.seconds[name] = self.seconds.get(name, 0.0) + (t1 - t0)
+        return t1
+
+
+def build_state(fluids: list[FluidBody], walls: list[WallBody], h_factor: float) -> FluidState:
+    """Flatten fluid and wall bodies into one :class:`FluidState` (fluid first, then walls).
+
+    The smoothing length is ``h = h_factor · Δx`` with each fluid body's spacing; wall particles
+    take the first fluid body's (the fluid bodies share one spacing).
+    """
+    dim = (fluids or walls)[0].dim
+    dx = fluids[0].spacing
+    bodies: dict[str, slice] = {}
+    xs, vs, rhos, Ms, hs, rho0s, mus, phases = [], [], [], [], [], [], [], []
+    start = 0
+    phase_offset = 0
+    for b in fluids:
+        xs.append(b.positions)
+        vs.append(b.velocity)
+        rhos.append(b.density)
+        Ms.append(b.density * b.spacing**dim)
+        hs.append(np.full(b.n, h_factor * b.spacing))
+        rho0s.append(b.reference_density)
+        mus.append(b.viscosity)
+        phases.append(b.phase + phase_offset)
+        phase_offset += len(b.phases)
+        bodies[b.name] = slice(start, start + b.n)
+        start += b.n
+    n_fluid = start
+    mu_wall = fluids[0].phases[0].viscosity if fluids else 0.0
+    wall_vol, wall_n, wall_v = [], [], []
+    for w in walls:
+        xs.append(w.positions)
+        vs.append(np.broadcast_to(w.velocity, (w.n, dim)))
+        rhos.append(np.full(w.n, w.reference_density))
+        Ms.append(np.full(w.n, w.reference_density * w.spacing**dim))
+        hs.append(np.full(w.n, h_factor * dx))
+        rho0s.append(np.full(w.n, w.reference_density))
+        mus.append(np.full(w.n, mu_wall))
+        phases.append(np.full(w.n, -1))
+        wall_vol.append(np.full(w.n, w.spacing**dim))
+        wall_n.append(w.normals if w.normals is not None else np.zeros((w.n, dim)))
+        wall_v.append(np.broadcast_to(w.velocity, (w.n, dim)))
+        bodies[w.name] = slice(start, start + w.n)
+        start += w.n
+    cat = lambda a, shape: np.ascontiguousarray(np.concatenate(a)) if a else np.zeros(shape)  # noqa: E731
+    return FluidState(
+        x=cat(xs, (0, dim)), v=cat(vs, (0, dim)).astype(float), rho=cat(rhos, (0,)), M=cat(Ms, (0,)),
+        h=cat(hs, (0,)), rho0=cat(rho0s, (0,)), mu=cat(mus, (0,)), phase=cat(phases, (0,)).astype(np.int64),
+        n_fluid=n_fluid, spacing=dx, wall_volume=cat(wall_vol, (0,)), wall_normals=cat(wall_n, (0, dim)),
+        wall_velocity=cat(wall_v, (0, dim)), bodies=bodies,
+    )
+
+
+class FluidSolver(Solver):
+    """Advances the fluid and wall bodies of a scene (see the module docstring).
+
+    Built by :class:`~mlsgalerkin.simulation.Simulation` from the scene's
+    :class:`~mlsgalerkin.fluid.bodies.FluidBody` and :class:`~mlsgalerkin.fluid.bodies.WallBody`
+    bodies, its effects and its fluid options (``approximation``, ``integrator``, ``mass``,
+    ``safety``, ``dt_max``).
+    """
+
+    key = "fluid"
+    takes_effects = True
+
+    # ------------------------------------------------------------------ validation
+    @classmethod
+    def problems(cls, bodies: list, scene: "Scene") -> list[str]:
+        """Every problem with the fluid part of ``scene`` (bodies, options, effects)."""
+        out: list[str] = []
+        fluids = [b for b in bodies if isinstance(b, FluidBody)]
+        if not fluids:
+            out.append("no FluidBody: wall bodies need at least one fluid body")
+        spacings = {b.spacing for b in fluids}
+        if len(spacings) > 1:
+            out.append(f"fluid bodies must share one particle spacing, got {sorted(spacings)}")
+        if scene.dt_max is not None and not scene.dt_max > 0:
+            out.append(f"dt_max must be positive, got {scene.dt_max!r}")
+        if not (0 < scene.safety <= 1.5):
+            out.append(f"safety factor must be in (0, 1.5], got {scene.safety!r}")
+        try:
+            make_integrator(scene.integrator)
+        except ValueError as err:
+            out.append(str(err))
+        if scene.mass not in MASS_OPTIONS:
+            out.append(f"mass must be 'lumped', 'particle' or 'consistent', got {scene.mass!r}")
+        out.extend(scene.approximation.problems())
+        for w in (b for b in bodies if isinstance(b, WallBody) and b.motion is not None):
+            out.extend(f"wall body {w.name!r}: {p}" for p in w.motion.check(w.dim))
+
+        effects = list(scene.effects)
+        for e in effects:
+            if not isinstance(e, Effect):
+                out.append(f"unknown effect {e!r}: effects must be Effect instances")
+        effects = [e for e in effects if isinstance(e, Effect)]
+        pressure = [e for e in effects if e.role == "pressure"]
+        if not pressure:
+            out.append("no pressure model: list exactly one of TaitPressure (or another effect with role 'pressure')")
+        elif len(pressure) > 1:
+            out.append(f"two pressure models listed: {pressure}; keep exactly one")
+        kinds = [type(e) for e in effects]
+        dup_e = sorted({k.__name__ for k in kinds if kinds.count(k) > 1})
+        if dup_e:
+            out.append(f"effects listed twice: {dup_e}")
+        enames = [e.name for e in effects]
+        dup_n = sorted({n for n in enames if enames.count(n) > 1})
+        if dup_n:
+            out.append(f"effect names must be unique (timings, reports and checkpoints are keyed by "
+                       f"name), repeated: {dup_n}; set a distinct `name` on each custom effect")
+        provided = set(SOLVER_QUANTITIES)
+        for e in effects:
+            provided |= set(e.provides)
+        for e in effects:
+            bad = [s for s in e.stages if s not in STAGES]
+            if bad:
+                out.append(f"{e!r}: unknown stage(s) {bad}; stages are {STAGES}")
+            missing = sorted(set(e.reads) - provided)
+            if missing:
+                out.append(f"{e!r} reads {missing}, which no listed effect provides")
+        if any(isinstance(b, WallBody) for b in bodies) and "wall_state" not in provided:
+            out.append("the scene has wall bodies but no wall treatment: list Walls()")
+        for p in scene.probes:
+            missing = sorted(set(p.reads) - provided)
+            if missing:
+                out.append(f"probe {p.name!r} reads {missing}, which no listed effect provides")
+        if scene.dim:
+            for e in effects:
+                try:
+                    out.extend(e.check(scene))
+                except Exception as exc:  # a check may depend on what failed above
+                    out.append(f"{e!r}: check failed ({exc})")
+        return out
+
+    # ------------------------------------------------------------------ set-up
+    def __init__(self, bodies: list, scene: "Scene") -> None:
+        self.scene = scene
+        self.fluids = [b for b in bodies if isinstance(b, FluidBody)]
+        self.walls = [b for b in bodies if isinstance(b, WallBody)]
+        ap = scene.approximation
+        self.approximation = ap
+        self.kernel = get_kernel(ap.kernel)
+        self.integrator = make_integrator(scene.integrator)
+        self.mass_option = scene.mass
+        self.effects: list[Effect] = list(scene.effects)
+        self._state = build_state(self.fluids, self.walls, ap.h_factor)
+        s = self._state
+        s.approximation_order = ap.order
+        self.search_radius = self.kernel.support * s.h + ap.skin * s.spacing
+        self._stage_effects = {st: [e for e in self.effects if st in e.stages] for st in STAGES}
+        self.timer = StageTimer()
+        self.fallback_points = 0
+        self.fallback_steps = 0
+        self.mass_floored = 0
+        self.neighbor_builds = 0
+        self.consistent_mass_unconverged = 0
+        self._table_volumes: np.ndarray | None = None
+        self._div: np.ndarray | None = None
+        self._external: np.ndarray | None = None
+        # walls with a prescribed motion: (rows in the state, rows among the walls, motion,
+        # reference positions, reference normals)
+        self._moving = []
+        for w in self.walls:
+            if w.motion is not None:
+                sl = s.bodies[w.name]
+                wsl = slice(sl.start - s.n_fluid, sl.stop - s.n_fluid)
+                n0 = w.normals if w.normals is not None else np.zeros_like(w.positions)
+                self._moving.append((sl, wsl, w.motion, w.positions.copy(), np.asarray(n0, dtype=float).copy()))
+        for e in self.effects:
+            e.setup(s, scene)
+        s.c = s.c if s.c is not None else np.zeros(s.n)
+        self.move_walls(0.0)
+        s.x_ref = s.x.copy()
+        self.started = False
+
+    @property
+    def state(self) -> FluidState:
+        return self._state
+
+    # ------------------------------------------------------------------ evaluation
+    def move_walls(self, t: float) -> None:
+        """Put the walls with a prescribed motion where they are at time ``t`` (positions,
+        velocities, accelerations, normals); fixed walls are untouched."""
+        s = self._state
+        for sl, wsl, motion, x0, n0 in self._moving:
+            s.x[sl] = motion.positions(x0, t)
+            s.wall_velocity[wsl] = motion.velocities(x0, t)
+            s.wall_acceleration[wsl] = motion.accelerations(x0, t)
+            s.wall_normals[wsl] = motion.rotate(n0, t)
+
+    def _neighbors(self) -> None:
+        s = self._state
+        t0 = time.perf_counter()
+        if s.neighbors is not None:
+            rows = slice(0, s.n) if self._moving else s.fluid
+            disp = s.x[rows] - s.x_ref[rows]
+            moved = float(np.sqrt(np.max(np.einsum("ij,ij->i", disp, disp)))) if disp.shape[0] else 0.0
+            if moved <= 0.5 * self.approximation.skin * s.spacing:
+                return
+            s.x_ref = s.x.copy()
+        s.neighbors = find_neighbors(s.x_ref, s.x_ref, radius=self.search_radius)
+        self.neighbor_builds += 1
+        self.timer.add("neighbors", t0)
+
+    def kinematics(self) -> None:
+        """Neighbours, shape functions, wall velocities, velocity gradient, continuity rate."""
+        self._neighbors()
+        t0 = time.perf_counter()
+        self._shape_functions()
+        nf = self._state.fallback_count
+        if nf:
+            self.fallback_points += nf
+            self.fallback_steps += 1
+        self.timer.add("shape_functions", t0)
+        self.continuity_rate()
+
+    def _shape_functions(self, volumes: np.ndarray | None = None) -> None:
+        """MLS/RKPM table at the current positions with the current neighbour list (RKPM:
+        with the volumes ``M/ρ`` of now, or the given ones when restoring a checkpoint)."""
+        s = self._state
+        ap = self.approximation
+        if ap.method == "rkpm":
+            self._table_volumes = s.M / s.rho if volumes is None else np.ascontiguousarray(volumes)
+        else:
+            self._table_volumes = None
+        s.table = evaluate_shape_functions(
+            s.x, s.x, s.h, s.neighbors, self.kernel, s.approximation_order, ap.method, self._table_volumes,
+            condition_limit=ap.condition_limit, out=s.table,
+        )
+        s.fallback_count = int(np.count_nonzero(s.table.order[: s.n_fluid] < s.approximation_order))
+
+    def continuity_rate(self) -> None:
+        """Wall velocities, ``L`` and ``ρ̇ = −ρ tr L`` with the current table and velocities."""
+        s = self._state
+        t0 = time.perf_counter()
+        for e in self._stage_effects["kinematics"]:
+            e.kinematics(s)
+            t0 = self.timer.add(e.name, t0)
+        s.L, self._div = velocity_gradient_divergence(s.table, s.v, s.L, self._div)
+        f = s.fluid
+        np.multiply(s.rho[f], self._div[f], out=s.drho[f])
+        np.negative(s.drho[f], out=s.drho[f])
+        self.timer.add("velocity_gradient", t0)
+
+    def dynamics(self) -> None:
+        """Pressure, wall state, stress, volumes, mass, forces and acceleration."""
+        s = self._state
+        t0 = time.perf_counter()
+        for st in ("pressure", "boundary"):
+            for e in self._stage_effects[st]:
+                getattr(e, st)(s)
+                t0 = self.timer.add(e.name, t0)
+        d = s.dim
+        stress = np.zeros((s.n, d, d))
+        for a in range(d):
+            stress[:, a, a] = -s.p
+        s.stress = stress
+        for e in self._stage_effects["stress"]:
+            e.stress(s)
+            t0 = self.timer.add(e.name, t0)
+        s.volume = s.M / s.rho
+        stress *= s.volume[:, None, None]
+        force, m = internal_force_and_mass(s.table, stress, s.M, want_mass=self.mass_option != "particle")
+        if self.mass_option == "particle":
+            m = s.M.copy()
+        else:
+            self.mass_floored += floor_lumped_mass(m, s.M, s.n_fluid)
+        s.mass = m
+        s.force = force
+        if self._external is not None:
+            s.force += self._external
+        t0 = self.timer.add("internal_force", t0)
+        for e in self._stage_effects["force"]:
+            e.force(s)
+            t0 = self.timer.add(e.name, t0)
+        f = s.fluid
+        if self.mass_option == "consistent":
+            s.a[f], bad = consistent_acceleration(s.table, s.M, s.n_fluid, s.force[f], s.a[f])
+            if bad and self.consistent_mass_unconverged == 0:
+                warn_consistent_unconverged()
+            self.consistent_mass_unconverged += bad
+        else:
+            s.a[f] = s.force[f] / s.mass[f, None]
+        s.a[s.walls] = 0.0
+        self.timer.add("acceleration", t0)
+
+    def evaluate(self) -> None:
+        """One full force evaluation at the current positions."""
+        self.kinematics()
+        self.dynamics()
+
+    def time_step_limit(self) -> float:
+        """``safety · min(effect limits, 0.25 sqrt(h/|a|))``, capped by ``dt_max``."""
+        s = self._state
+        limits = [e.time_step_limit(s) for e in self.effects]
+        f = s.fluid
+        limits.append(force_limit(s.h[f], s.a[f]))
+        dt = self.scene.safety * min(limits)
+        if self.scene.dt_max is not None:
+            dt = min(dt, self.scene.dt_max)
+        # a NaN limit comes from a non-finite state: leave it to the watchdog, which names the
+        # particle and the quantity
+        if math.isinf(dt):
+            raise ValueError(
+                "no time-step limit: no effect supplies one and the acceleration is zero; set "
+                "scene.dt_max"
+            )
+        return dt
+
+    # ------------------------------------------------------------------ Solver protocol
+    def start(self) -> None:
+        """First force evaluation at ``t = 0`` (rates for the first kick, ``dt_next``)."""
+        s = self._state
+        self.evaluate()
+        s.dt_next = self.time_step_limit()
+        self.started = True
+
+    def stable_time_step(self) -> float:
+        return self._state.dt_next
+
+    def begin_step(self, t: float, dt: float) -> None:
+        self.integrator.begin(self, t, dt)
+
+    def end_step(self, t: float, dt: float) -> None:
+        s = self._state
+        self.integrator.end(self, t, dt)
+        t0 = time.perf_counter()
+        s.t += dt
+        s.step += 1
+        self.timer.add("integrate", t0)
+        t0 = time.perf_counter()
+        for e in self._stage_effects["after_step"]:
+            e.after_step(s)
+            t0 = self.timer.add(e.name, t0)
+        s.dt_next = self.time_step_limit()
+
+    def surface(self, body: str) -> Surface:
+        """A fluid body's particles as slave nodes (positions, velocities, masses)."""
+        s = self._state
+        sl = s.bodies[body]
+        return Surface(body, s.x[sl], s.v[sl], np.zeros((0, s.dim), dtype=np.int64), s.M[sl])
+
+    def clear_surface_forces(self) -> None:
+        if self._external is not None:
+            self._external[:] = 0.0
+
+    def add_surface_forces(self, body: str, forces: np.ndarray) -> None:
+        s = self._state
+        if self._external is None:
+            self._external = np.zeros_like(s.x)
+        self._external[s.bodies[body]] += forces
+
+    # ------------------------------------------------------------------ checkpoints
+    def checkpoint(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        s = self._state
+        arrays = {k: getattr(s, k).copy() for k in CHECKPOINT_ARRAYS}
+        for k, v in s.extra.items():
+            arrays[f"extra__{k}"] = np.asarray(v).copy()
+        if self._table_volumes is not None:  # RKPM: the volumes of the current table
+            arrays["table_volumes"] = self._table_volumes.copy()
+        meta = {
+            "t": s.t, "step": s.step, "dt_next": s.dt_next, "n": s.n, "n_fluid": s.n_fluid,
+            "effects": {e.name: e.state_dict() for e in self.effects},
+            "counters": {"fallback_points": self.fallback_points, "fallback_steps": self.fallback_steps,
+                         "mass_floored": self.mass_floored, "neighbor_builds": self.neighbor_builds,
+                         "consistent_mass_unconverged": self.consistent_mass_unconverged},
+        }
+        return arrays, meta
+
+    def restore(self, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> None:
+        s = self._state
+        if meta.get("n") != s.n or meta.get("n_fluid") != s.n_fluid:
+            raise ValueError(
+                f"checkpoint has {meta.get('n')} particles ({meta.get('n_fluid')} fluid) but the scene "
+                f"has {s.n} ({s.n_fluid}); restart with the scene that wrote it"
+            )
+        missing = [k for k in CHECKPOINT_ARRAYS if k not in arrays]
+        if missing:
+            raise ValueError(f"checkpoint lacks the fluid arrays {missing}; it was not written by this solver")
+        for k in CHECKPOINT_ARRAYS:
+            setattr(s, k, np.ascontiguousarray(arrays[k]).copy())
+        for k, v in arrays.items():
+            if k.startswith("extra__"):
+                s.extra[k[len("extra__"):]] = v.copy()
+        s.t, s.step, s.dt_next = float(meta["t"]), int(meta["step"]), float(meta["dt_next"])
+        for e in self.effects:
+            e.load_state_dict(meta["effects"].get(e.name, {}))
+        c = meta["counters"]
+        self.fallback_points, self.fallback_steps = c["fallback_points"], c["fallback_steps"]
+        self.mass_floored, self.neighbor_builds = c["mass_floored"], c["neighbor_builds"]
+        self.consistent_mass_unconverged = c.get("consistent_mass_unconverged", 0)
+        # wall velocities, accelerations and normals of the checkpoint's time (the positions
+        # are in the checkpoint)
+        x_walls = s.x.copy()
+        self.move_walls(s.t)
+        s.x[:] = x_walls
+        # rebuild the neighbour list from the reference positions it was built from, so the
+        # skin logic and the pair order are exactly those of the uninterrupted run
+        s.neighbors = find_neighbors(s.x_ref, s.x_ref, radius=self.search_radius)
+        # the first kick of the next step forms L with the table of the current positions
+        # (kdk); without it a restarted run had no table at all
+        self._shape_functions(arrays.get("table_volumes"))
+        self.started = True
+
+    # ------------------------------------------------------------------ report
+    def summary(self) -> dict[str, Any]:
+        s = self._state
+        total = sum(self.timer.seconds.values()) or 1.0
+        return {
+            "particles": {"fluid": s.n_fluid, "wall": s.n_walls, "total": s.n},
+            "spacing_m": s.spacing, "h_m": float(s.h[0]) if s.n else None,
+            "approximation": to_jsonable(self.approximation.__dict__),
+            "integrator": self.integrator.name, "mass": self.mass_option,
+            "effects": [repr(e) for e in self.effects],
+            "moving_walls": [f"{w.name}: {w.motion!r}" for w in self.walls if w.motion is not None],
+            "time_per_stage_s": {k: round(v, 6) for k, v in sorted(self.timer.seconds.items(), key=lambda kv: -kv[1])},
+            "time_per_stage_fraction": {k: round(v / total, 4) for k, v in self.timer.seconds.items()},
+            "diagnostics": {
+                "shape_function_fallback_points": self.fallback_points,
+                "steps_with_fallback": self.fallback_steps,
+                "lumped_mass_floored": self.mass_floored,
+                "consistent_mass_unconverged_solves": self.consistent_mass_unconverged,
+                "neighbour_rebuilds": self.neighbor_builds,
+                "total_mass_kg": s.total_mass(),
+                "kinetic_energy_J": s.kinetic_energy(),
+                "momentum": s.momentum().tolist(),
+            },
+            "effect_reports": {e.name: to_jsonable(e.summary()) for e in self.effects if e.summary()},
+        }
