@@ -89,7 +89,7 @@ from mlsgalerkin.basis import MeshfreeBasis
 from mlsgalerkin.forms import BilinearForm, LinearForm
 from mlsgalerkin.helpers import dot, grad, mul
 from mlsgalerkin.integration import NodalIntegration, clipped_voronoi_cells, polygon_area
-from mlsgalerkin.integration.voronoi import _check_domain
+from mlsgalerkin.integration.voronoi import check_domain
 
 __all__ = [
     "BoundaryBasis",
@@ -265,7 +265,7 @@ def boundary_basis(
         )
     if segments not in SEGMENTATIONS:
         raise ValueError(f"unknown segments {segments!r}; choose one of {', '.join(SEGMENTATIONS)}")
-    dom = _check_domain(domain)
+    dom = check_domain(domain)
     m = dom.shape[0]
     if edges is None:
         edges = list(range(m))
