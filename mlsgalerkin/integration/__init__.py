@@ -1,5 +1,6 @@
-"""Nodal integration rules (DNI, SCNI) and nodal volumes from clipped Voronoi cells."""
+"""Nodal integration rules (DNI, SCNI), nodal volumes from clipped Voronoi cells, boundary quadrature."""
 
+from mlsgalerkin.integration.boundary import BoundaryBasis, boundary_basis
 from mlsgalerkin.integration.rules import (
     NodalIntegration,
     direct_nodal_integration,
@@ -8,7 +9,9 @@ from mlsgalerkin.integration.rules import (
 from mlsgalerkin.integration.voronoi import clipped_voronoi_cells, polygon_area, rectangle, voronoi_volumes
 
 __all__ = [
+    "BoundaryBasis",
     "NodalIntegration",
+    "boundary_basis",
     "clipped_voronoi_cells",
     "direct_nodal_integration",
     "polygon_area",
