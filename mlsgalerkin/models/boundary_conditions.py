@@ -4,8 +4,8 @@ MLS/RKPM shape functions are not interpolating (``N_J(x_I) ≠ δ_IJ``), so pres
 not be set on DOFs as in finite elements (seed digest §4.2). They are imposed weakly on the
 boundary Gauss points of :func:`~mlsgalerkin.integration.boundary_basis` instead.
 
-Nitsche's method (symmetric)
-----------------------------
+Nitsche's method (symmetric; Nitsche 1971)
+------------------------------------------
 For ``-∇·F(u) = f`` with flux ``F`` (``∇u`` for Poisson, ``σ(u)`` for elasticity) and
 ``u = g`` on ``Γ_D``:
 
@@ -22,35 +22,23 @@ Choice of the penalty ``β M / h`` (``nitsche``): ``M`` (``modulus``) is the mat
 units of the consistency terms (modulus / length); ``h`` is a local nodal spacing, so the
 parameter does not need retuning under refinement. ``β = 100`` (dimensionless) is the default.
 
-``β > 2 C_I`` is sufficient for coercivity; :func:`nitsche_inverse_constant` measures ``C_I``.
-Measured (unit square, cubic spline, linear MLS, dilation 1.5 Δx; elasticity with ``M = E``,
-ν = 0.3), for ``n x n`` nodes:
-
-=====================================  =========  =========  =========  ==========
-boundary gradients, nodes               n = 7      n = 11     n = 21     n = 41
-=====================================  =========  =========  =========  ==========
-direct, regular (Poisson / elastic)     12 / 15    12 / 17    11 / 18
-direct, perturbed ±0.3 Δx               9 / 13     15 / 24    23 / 41    – / 64
-rule (SCNI smoothed), any of the above  1.4–1.6 / 1.9–2.2 (flat in n and dilation)
-=====================================  =========  =========  =========  ==========
-
-With direct gradients ``C_I`` also grows with the dilation (Poisson, 7 x 7 perturbed: 9, 27,
-71 for 1.5, 2, 2.5 Δx) and with ν (λ dominates σ: use ``M = λ + 2μ`` near incompressibility),
-because SCNI's smoothed domain energy does not control pointwise direct gradients on the
-boundary. The bound is only sufficient: at 41 x 41 perturbed nodes (``2 C_I = 127 > β``) the
-elastic system with ``β = 100`` is still positive definite, with the same lowest eigenvalues as
-with ``gradients="rule"``. ``gradients="rule"`` (see :func:`~mlsgalerkin.integration.boundary_basis`) makes ``β = 100``
-safe with a margin of ~25 whatever the dilation or refinement, and keeps the patch test exact.
-Nitsche's error is insensitive to ``β`` once stable; the conditioning grows linearly with it.
+``β > 2 C_I`` is sufficient for coercivity; :func:`nitsche_inverse_constant` measures ``C_I`` for
+a given basis. With direct boundary gradients ``C_I`` grows with the dilation, with ν (λ
+dominates σ: use ``M = λ + 2μ`` near incompressibility) and, on perturbed nodes, with
+refinement, because SCNI's smoothed domain energy does not control pointwise direct gradients on
+the boundary. Recommendation: keep ``gradients="rule"``, the default of
+:func:`~mlsgalerkin.integration.boundary_basis` for SCNI bases: it keeps ``C_I`` of order one
+whatever the dilation or refinement, so the default ``β = 100`` is safe, and the patch test stays
+exact. Nitsche's error is insensitive to ``β`` once stable; the conditioning grows linearly with
+it. Measured ``C_I``: ``docs/theory/galerkin_nodal_integration.md`` §3.
 
 Penalty method
 --------------
 ``(βM/h)∫u·v`` and ``(βM/h)∫g·v`` only: simple and symmetric but not consistent (the flux
-terms are missing), so the error is ``O(1/β)`` and never reaches round-off, even for a linear
-solution: in the SCNI Poisson patch test (9 x 9 perturbed nodes) the relative L2 error is
-1.3e-3, 1.4e-4, 2.2e-5 for ``β`` = 1e2, 1e3, 1e4 and then stalls around 1e-6 (``β`` = 1e5 to
-1e8) because the conditioning grows like ``β``. Default ``β = 1e4``: close to the end of the
-``1/β`` range, without ruining the conditioning.
+terms are missing), so the error falls like ``1/β`` but never reaches round-off, even for a
+linear solution: the conditioning, which grows like ``β``, stalls it first. Default ``β = 1e4``:
+close to the end of the ``1/β`` range, without ruining the conditioning. Measured errors:
+``docs/theory/galerkin_nodal_integration.md`` §3.
 """
 
 from __future__ import annotations
@@ -217,7 +205,8 @@ def nitsche_inverse_constant(
     Symmetric Nitsche is coercive for ``β > 2 C_I`` (Young's inequality on the flux terms).
     ``C_I`` depends on the dilation in units of the nodal spacing, the kernel, the rule and the
     boundary gradients; on regular nodes not on the refinement level, on perturbed nodes with
-    direct gradients it grows slowly with the node count (see the module docstring's table).
+    direct gradients it grows slowly with the node count (measured values:
+    ``docs/theory/galerkin_nodal_integration.md`` §3).
     ``stiffness`` is the assembled domain matrix ``a`` (its null space, constants or rigid
     motions, carries no flux and is regularised away). Dense generalized eigenproblem: small
     node sets only.
