@@ -16,8 +16,7 @@ import pytest
 from scipy.sparse.linalg import spsolve
 
 from mlsgalerkin.analysis import ErrorNorms, rectangle_quadrature
-from mlsgalerkin.basis import meshfree_basis
-from mlsgalerkin.integration import boundary_basis
+from mlsgalerkin.integration import boundary_basis, meshfree_basis
 from mlsgalerkin.models import elasticity, nitsche, poisson
 from mlsgalerkin.studies.galerkin.problems import (
     PROBLEMS,

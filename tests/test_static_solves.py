@@ -28,12 +28,13 @@ from scipy.sparse import csr_array, diags_array
 from scipy.sparse.linalg import spsolve
 
 from mlsgalerkin.analysis import ErrorNorms, rectangle_quadrature
-from mlsgalerkin.basis import MeshfreeBasis, meshfree_basis
+from mlsgalerkin.basis import MeshfreeBasis
 from mlsgalerkin.forms import BilinearForm, Functional, LinearForm
 from mlsgalerkin.helpers import div, dot, grad
 from mlsgalerkin.integration import (
     boundary_basis,
     direct_nodal_integration,
+    meshfree_basis,
     rectangle,
     voronoi_volumes,
 )

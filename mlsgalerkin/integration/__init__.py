@@ -1,6 +1,7 @@
 """Nodal integration rules (DNI, SCNI), nodal volumes from clipped Voronoi cells, boundary quadrature."""
 
 from mlsgalerkin.integration.boundary import BoundaryBasis, boundary_basis
+from mlsgalerkin.integration.nodal_basis import meshfree_basis
 from mlsgalerkin.integration.rules import (
     NodalIntegration,
     direct_nodal_integration,
@@ -14,6 +15,7 @@ __all__ = [
     "boundary_basis",
     "clipped_voronoi_cells",
     "direct_nodal_integration",
+    "meshfree_basis",
     "polygon_area",
     "rectangle",
     "stabilized_conforming_nodal_integration",

@@ -28,8 +28,7 @@ passes to round-off, provided the Nitsche/traction terms use the same boundary p
 VCI restores consistency, not stability: DNI's spurious low-energy modes remain.
 
 >>> import numpy as np
->>> from mlsgalerkin.basis import meshfree_basis
->>> from mlsgalerkin.integration import rectangle
+>>> from mlsgalerkin.integration import meshfree_basis, rectangle
 >>> g = np.stack(np.meshgrid(*[np.linspace(0, 1, 6)] * 2, indexing="ij"), -1).reshape(-1, 2)
 >>> dom = rectangle((0, 0), (1, 1))
 >>> dni = meshfree_basis(g, 0.3, rule="dni", domain=dom)

@@ -43,8 +43,8 @@ from typing import Any
 import numpy as np
 
 from mlsgalerkin.analysis import ErrorNorms, rectangle_quadrature
-from mlsgalerkin.basis import MeshfreeBasis, meshfree_basis
-from mlsgalerkin.integration import BoundaryBasis, boundary_basis
+from mlsgalerkin.basis import MeshfreeBasis
+from mlsgalerkin.integration import BoundaryBasis, boundary_basis, meshfree_basis
 from mlsgalerkin.kernels import get_kernel
 from mlsgalerkin.models import (
     elasticity,
