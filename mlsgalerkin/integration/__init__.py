@@ -1,4 +1,4 @@
-"""Nodal integration rules (DNI, SCNI), nodal volumes from clipped Voronoi cells, boundary quadrature."""
+"""Nodal integration rules (DNI, SCNI), nodal volumes from Voronoi cells, boundary quadrature."""
 
 from mlsgalerkin.integration.boundary import BoundaryBasis, boundary_basis
 from mlsgalerkin.integration.nodal_basis import meshfree_basis
@@ -7,7 +7,12 @@ from mlsgalerkin.integration.rules import (
     direct_nodal_integration,
     stabilized_conforming_nodal_integration,
 )
-from mlsgalerkin.integration.voronoi import clipped_voronoi_cells, polygon_area, rectangle, voronoi_volumes
+from mlsgalerkin.integration.voronoi import (
+    clipped_voronoi_cells,
+    polygon_area,
+    rectangle,
+    voronoi_volumes,
+)
 
 __all__ = [
     "BoundaryBasis",

@@ -1,4 +1,4 @@
-"""Reusable forms (mirroring :mod:`skfem.models`): Poisson, linear elasticity, weak boundary conditions."""
+"""Reusable forms (mirroring :mod:`skfem.models`): Poisson, elasticity, weak boundary conditions."""
 
 from mlsgalerkin.models import boundary_conditions, elasticity, poisson
 from mlsgalerkin.models.boundary_conditions import (

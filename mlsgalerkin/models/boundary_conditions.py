@@ -15,7 +15,8 @@ For ``-∇·F(u) = f`` with flux ``F`` (``∇u`` for Poisson, ``σ(u)`` for elas
     = l(v) + \int_{Γ_D}\Big[-(F(v)n)\cdot g + \frac{βM}{h}\,g\cdot v\Big]dΓ .
 
 It is variationally consistent (the exact solution satisfies it), symmetric, and coercive when
-``β > 2 C_I``, with ``C_I`` the inverse-estimate constant in ``h ||F(v)n||²_Γ ≤ C_I M a(v, v)``.
+``β > 2 C_I``, with ``C_I`` the inverse-estimate constant in
+``h ||F(v)n||²_Γ ≤ C_I M a(v, v)``.
 
 Choice of the penalty ``β M / h`` (``nitsche``): ``M`` (``modulus``) is the material scale
 (1 or the conductivity for Poisson; ``E`` for elasticity), so that the penalty term has the
