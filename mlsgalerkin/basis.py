@@ -3,11 +3,12 @@ r"""MeshfreeBasis: the approximation evaluated at an integration rule's points.
 A :class:`MeshfreeBasis` plays the role of :class:`skfem.Basis`: it couples the nodes (the
 geometry), the shape functions (the approximation) and an integration rule (the points,
 weights and the gradients the rule uses: direct for DNI, smoothed for SCNI), so that the forms
-of :mod:`mlsgalerkin.forms` can be assembled against it.
+of :mod:`mlsgalerkin.forms` can be assembled against it. Any rule-like object will do (see
+:class:`MeshfreeBasis`); :func:`mlsgalerkin.integration.meshfree_basis` builds a DNI or SCNI rule
+and wraps it, so this module imports nothing from :mod:`mlsgalerkin.integration`.
 
 >>> import numpy as np
->>> from mlsgalerkin.basis import meshfree_basis
->>> from mlsgalerkin.integration import rectangle
+>>> from mlsgalerkin.integration import meshfree_basis, rectangle
 >>> g = np.stack(np.meshgrid(*[np.linspace(0, 1, 6)] * 2, indexing="ij"), -1).reshape(-1, 2)
 >>> basis = meshfree_basis(g, h=0.3, rule="scni", domain=rectangle((0, 0), (1, 1)))
 >>> basis.n_dofs, float(basis.weights.sum())
@@ -43,12 +44,11 @@ from numpy.typing import ArrayLike, NDArray
 from mlsgalerkin.approximation import ShapeTable, shape_functions
 from mlsgalerkin.neighbors import as_coordinates
 
-__all__ = ["DiscreteField", "MeshfreeBasis", "meshfree_basis", "RULES"]
+__all__ = ["DiscreteField", "MeshfreeBasis"]
 
 logger = logging.getLogger(__name__)
 
 FloatArray = NDArray[np.float64]
-RULES = ("scni", "dni")
 
 
 class DiscreteField(np.ndarray):
@@ -270,60 +270,3 @@ class MeshfreeBasis:
     def pair_points(self) -> NDArray[np.int64]:
         """Integration point of each table pair, ``(n_pairs,)``."""
         return self.table.rows()
-
-
-def meshfree_basis(
-    nodes: ArrayLike,
-    h: ArrayLike,
-    *,
-    rule: str = "scni",
-    domain: ArrayLike | None = None,
-    volumes: ArrayLike | None = None,
-    n_components: int = 1,
-    n_gauss: int = 2,
-    **shape_kw: Any,
-) -> MeshfreeBasis:
-    """Build a nodal integration rule and wrap it in a :class:`MeshfreeBasis` (2D for SCNI).
-
-    Parameters
-    ----------
-    nodes : (n_nodes, dim) float array
-    h : float or (n_nodes,) float array
-        Dilation; node ``I`` supports ``|x - x_I| < κ h_I`` (κ = kernel support, 2 for the
-        cubic spline).
-    rule : ``"scni"`` or ``"dni"``
-    domain : (n_corners, 2) float array
-        Convex counter-clockwise polygon (e.g. :func:`~mlsgalerkin.integration.rectangle`).
-        Required for SCNI, and for DNI unless ``volumes`` is given.
-    volumes : (n_nodes,) float array, optional
-        DNI weights; default the clipped Voronoi cell areas.
-    n_components : 1 or dim
-    n_gauss : int
-        Gauss points per SCNI cell edge.
-    **shape_kw
-        ``kernel``, ``basis``, ``method``, ... of :func:`~mlsgalerkin.shape_functions`.
-    """
-    from mlsgalerkin.integration import (
-        direct_nodal_integration,
-        stabilized_conforming_nodal_integration,
-        voronoi_volumes,
-    )
-
-    key = str(rule).lower()
-    if key not in RULES:
-        raise ValueError(f"unknown integration rule {rule!r}; choose one of {', '.join(RULES)}")
-    x = as_coordinates("nodes", nodes)
-    if key == "scni":
-        if domain is None:
-            raise ValueError("rule='scni' needs the domain polygon (e.g. rectangle(lower, upper))")
-        r = stabilized_conforming_nodal_integration(x, h, domain, n_gauss=n_gauss, **shape_kw)
-    else:
-        if volumes is None:
-            if domain is None:
-                raise ValueError("rule='dni' needs volumes or a domain to compute Voronoi volumes")
-            volumes = voronoi_volumes(x, domain)
-        r = direct_nodal_integration(x, h, volumes, **shape_kw)
-    kw = {"kernel": r.table.kernel, "basis": r.table.requested_order, "method": r.table.method}
-    kw.update(shape_kw)
-    logger.debug("built %s basis on %d nodes (%d pairs)", r.name, x.shape[0], r.table.n_pairs)
-    return MeshfreeBasis(x, r, n_components, h=h, shape_kw=kw)

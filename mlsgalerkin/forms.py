@@ -1,10 +1,9 @@
 r"""Bilinear and linear forms with scikit-fem's call style, assembled on a :class:`MeshfreeBasis`.
 
 >>> import numpy as np
->>> from mlsgalerkin.basis import meshfree_basis
 >>> from mlsgalerkin.forms import BilinearForm, LinearForm
 >>> from mlsgalerkin.helpers import dot, grad
->>> from mlsgalerkin.integration import rectangle
+>>> from mlsgalerkin.integration import meshfree_basis, rectangle
 >>> g = np.stack(np.meshgrid(*[np.linspace(0, 1, 6)] * 2, indexing="ij"), -1).reshape(-1, 2)
 >>> basis = meshfree_basis(g, h=0.3, rule="scni", domain=rectangle((0, 0), (1, 1)))
 >>> @BilinearForm

@@ -16,9 +16,8 @@ import pytest
 from scipy.sparse.linalg import spsolve
 
 from mlsgalerkin.analysis import ErrorNorms, rectangle_quadrature
-from mlsgalerkin.basis import meshfree_basis
-from mlsgalerkin.boundary import boundary_basis, nitsche
-from mlsgalerkin.models import elasticity, poisson
+from mlsgalerkin.integration import boundary_basis, meshfree_basis
+from mlsgalerkin.models import elasticity, nitsche, poisson
 from mlsgalerkin.studies.galerkin.problems import (
     PROBLEMS,
     elastic_patch,

@@ -28,18 +28,24 @@ from scipy.sparse import csr_array, diags_array
 from scipy.sparse.linalg import spsolve
 
 from mlsgalerkin.analysis import ErrorNorms, rectangle_quadrature
-from mlsgalerkin.basis import MeshfreeBasis, meshfree_basis
-from mlsgalerkin.boundary import (
+from mlsgalerkin.basis import MeshfreeBasis
+from mlsgalerkin.forms import BilinearForm, Functional, LinearForm
+from mlsgalerkin.helpers import div, dot, grad
+from mlsgalerkin.integration import (
     boundary_basis,
+    direct_nodal_integration,
+    meshfree_basis,
+    rectangle,
+    voronoi_volumes,
+)
+from mlsgalerkin.models import (
+    elasticity,
     neumann_load,
     nitsche,
     nitsche_inverse_constant,
     penalty,
+    poisson,
 )
-from mlsgalerkin.forms import BilinearForm, Functional, LinearForm
-from mlsgalerkin.helpers import div, dot, grad
-from mlsgalerkin.integration import direct_nodal_integration, rectangle, voronoi_volumes
-from mlsgalerkin.models import elasticity, poisson
 
 DOMAIN = rectangle((0, 0), (1, 1))
 QUAD = rectangle_quadrature((0, 0), (1, 1), n_cells=16, n_gauss=4)
@@ -302,7 +308,7 @@ def test_boundary_quadrature_geometry():
 
 def test_nodes_segmentation_warns_for_scni(caplog):
     b = make_basis("scni")
-    with caplog.at_level(logging.WARNING, logger="mlsgalerkin.boundary"):
+    with caplog.at_level(logging.WARNING, logger="mlsgalerkin.integration.boundary"):
         boundary_basis(b, DOMAIN, segments="nodes")
     assert "will not cancel exactly" in caplog.text
 

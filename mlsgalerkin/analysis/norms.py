@@ -93,7 +93,7 @@ class ErrorNorms:
     Parameters
     ----------
     basis : MeshfreeBasis
-        Must know its dilation ``h`` (e.g. built by :func:`~mlsgalerkin.basis.meshfree_basis`).
+        Must know its dilation ``h`` (e.g. built by :func:`~mlsgalerkin.integration.meshfree_basis`).
     quadrature : Quadrature
         Background rule covering the domain, e.g. :func:`rectangle_quadrature`.
     """

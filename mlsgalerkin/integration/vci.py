@@ -23,13 +23,12 @@ field's discrete gradient stays exact and constants (rigid motions) keep zero en
 stiffness ``K_IJ = Σ_L w_L a(N_J, Ñ_I)(x_L)`` is therefore **unsymmetric** (Petrov–Galerkin).
 With both consistency (trial) and the integration constraint (test) the linear patch test
 passes to round-off, provided the Nitsche/traction terms use the same boundary points
-(:func:`~mlsgalerkin.boundary.boundary_basis` with ``segments="cells"``, the default).
+(:func:`~mlsgalerkin.integration.boundary_basis` with ``segments="cells"``, the default).
 
 VCI restores consistency, not stability: DNI's spurious low-energy modes remain.
 
 >>> import numpy as np
->>> from mlsgalerkin.basis import meshfree_basis
->>> from mlsgalerkin.integration import rectangle
+>>> from mlsgalerkin.integration import meshfree_basis, rectangle
 >>> g = np.stack(np.meshgrid(*[np.linspace(0, 1, 6)] * 2, indexing="ij"), -1).reshape(-1, 2)
 >>> dom = rectangle((0, 0), (1, 1))
 >>> dni = meshfree_basis(g, 0.3, rule="dni", domain=dom)
@@ -49,8 +48,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from mlsgalerkin.basis import MeshfreeBasis
-from mlsgalerkin.boundary import boundary_basis
-from mlsgalerkin.integration import NodalIntegration
+from mlsgalerkin.integration.boundary import boundary_basis
+from mlsgalerkin.integration.rules import NodalIntegration
 
 __all__ = ["vci_test_basis", "integration_constraint_residual", "CORRECTIONS"]
 
@@ -78,7 +77,7 @@ def integration_constraint_residual(basis: MeshfreeBasis, domain: ArrayLike, *,
 
     ``|Σ_L ∇N_I(x_L) w_L − ∮ N_I n dΓ|`` divided by ``max_I Σ_L |∇N_I(x_L)| w_L``; round-off
     is ~1e-15. The boundary integral uses the cell-edge quadrature of
-    :func:`~mlsgalerkin.boundary.boundary_basis`.
+    :func:`~mlsgalerkin.integration.boundary_basis`.
     """
     b = _boundary_moments(basis, domain, n_gauss)
     a = _domain_moments(basis)
@@ -101,7 +100,7 @@ def vci_test_basis(basis: MeshfreeBasis, domain: ArrayLike, *, correction: str =
         Profile ``c_I`` of the correction (see the module docstring).
     n_gauss : int, optional
         Gauss points per boundary cell edge (default 2, as
-        :func:`~mlsgalerkin.boundary.boundary_basis`).
+        :func:`~mlsgalerkin.integration.boundary_basis`).
 
     Returns
     -------

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["rectangle", "polygon_area", "clipped_voronoi_cells", "voronoi_volumes"]
+__all__ = ["rectangle", "polygon_area", "check_domain", "clipped_voronoi_cells", "voronoi_volumes"]
 
 
 def rectangle(lower: ArrayLike, upper: ArrayLike) -> NDArray[np.float64]:
@@ -33,7 +33,12 @@ def polygon_area(poly: NDArray[np.float64]) -> float:
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
 
 
-def _check_domain(domain: ArrayLike) -> NDArray[np.float64]:
+def check_domain(domain: ArrayLike) -> NDArray[np.float64]:
+    """``domain`` as a ``(n_corners, 2)`` float array, after checking it is a convex CCW polygon.
+
+    Raises ``ValueError`` for fewer than 3 corners, clockwise order or a non-convex corner
+    (the clipping and the boundary quadrature assume a convex counter-clockwise polygon).
+    """
     d = np.asarray(domain, dtype=float)
     if d.ndim != 2 or d.shape[1] != 2 or d.shape[0] < 3:
         raise ValueError(f"domain must be a (n_corners >= 3, 2) polygon, got shape {d.shape}")
@@ -72,7 +77,7 @@ def clipped_voronoi_cells(nodes: ArrayLike, domain: ArrayLike) -> list[NDArray[n
     x = np.asarray(nodes, dtype=float)
     if x.ndim != 2 or x.shape[1] != 2:
         raise ValueError(f"clipped Voronoi cells are 2D: nodes must be (n, 2), got {x.shape}")
-    dom = _check_domain(domain)
+    dom = check_domain(domain)
     if len(np.unique(x, axis=0)) != len(x):
         raise ValueError("nodes contain duplicates; a Voronoi diagram needs distinct nodes")
     mirrors = [x]

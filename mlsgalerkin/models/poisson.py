@@ -1,8 +1,7 @@
 r"""Forms for the Poisson problem ``-∇·(k ∇u) = f`` (scalar bases).
 
 >>> import numpy as np
->>> from mlsgalerkin.basis import meshfree_basis
->>> from mlsgalerkin.integration import rectangle
+>>> from mlsgalerkin.integration import meshfree_basis, rectangle
 >>> from mlsgalerkin.models.poisson import laplace, source
 >>> g = np.stack(np.meshgrid(*[np.linspace(0, 1, 6)] * 2, indexing="ij"), -1).reshape(-1, 2)
 >>> basis = meshfree_basis(g, h=0.3, domain=rectangle((0, 0), (1, 1)))

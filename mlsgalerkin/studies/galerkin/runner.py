@@ -43,17 +43,17 @@ from typing import Any
 import numpy as np
 
 from mlsgalerkin.analysis import ErrorNorms, rectangle_quadrature
-from mlsgalerkin.basis import MeshfreeBasis, meshfree_basis
-from mlsgalerkin.boundary import (
-    BoundaryBasis,
-    boundary_basis,
+from mlsgalerkin.basis import MeshfreeBasis
+from mlsgalerkin.integration import BoundaryBasis, boundary_basis, meshfree_basis
+from mlsgalerkin.kernels import get_kernel
+from mlsgalerkin.models import (
+    elasticity,
     neumann_load,
     nitsche,
     nitsche_inverse_constant,
     penalty,
+    poisson,
 )
-from mlsgalerkin.kernels import get_kernel
-from mlsgalerkin.models import elasticity, poisson
 from mlsgalerkin.studies.galerkin.problems import Problem, get_problem, node_grid
 from mlsgalerkin.integration.vci import vci_test_basis
 

@@ -1,0 +1,139 @@
+"""mlsgalerkin's import graph has no cycles, between modules or between top-level packages.
+
+Every module is parsed with :mod:`ast`; every ``import mlsgalerkin...`` / ``from mlsgalerkin...
+import ...``, module-level or inside a function, is an edge. Importing ``a.b.c`` runs the
+``__init__`` of ``a.b`` first, so it is also an edge to ``a.b``. Imports under
+``if TYPE_CHECKING:`` are never executed and are left out. The package graph merges every module
+into its top-level node (``mlsgalerkin.integration``, ``mlsgalerkin.basis``, ...): a layer that
+imports another layer must not be imported by it, not even lazily.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parents[1] / "mlsgalerkin"
+
+
+def module_names() -> dict[str, Path]:
+    out = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        out[".".join(parts)] = path
+    return out
+
+
+def _under_type_checking(node: ast.AST, parent: dict[ast.AST, ast.AST]) -> bool:
+    while node in parent:
+        node = parent[node]
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            return True
+    return False
+
+
+def import_edges(modules: dict[str, Path]) -> set[tuple[str, str]]:
+    """``(importer, imported)`` pairs of modules of the package (packages count as modules)."""
+
+    def known_prefix(name: str) -> str | None:
+        while name and name not in modules:
+            name = name.rpartition(".")[0]
+        return name or None
+
+    edges = set()
+    for name, path in modules.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+        parent = {child: node for node in ast.walk(tree) for child in ast.iter_child_nodes(node)}
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = package.split(".")[: len(package.split(".")) - node.level + 1]
+                    source = ".".join(base + ([node.module] if node.module else []))
+                else:
+                    source = node.module or ""
+                targets = [source] + [f"{source}.{a.name}" for a in node.names]
+            else:
+                continue
+            if _under_type_checking(node, parent):
+                continue
+            for target in targets:
+                found = known_prefix(target) if target.startswith("mlsgalerkin") else None
+                if found is None:
+                    continue
+                chain = found.split(".")
+                for k in range(2, len(chain) + 1):  # a.b.c also runs a.b's __init__
+                    imported = ".".join(chain[:k])
+                    if imported != name and not name.startswith(imported + "."):
+                        edges.add((name, imported))
+    return edges
+
+
+def cycles(edges: set[tuple[str, str]]) -> list[list[str]]:
+    """Strongly connected components with more than one node (Tarjan)."""
+    graph: dict[str, set[str]] = {}
+    for a, b in edges:
+        graph.setdefault(a, set()).add(b)
+        graph.setdefault(b, set())
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def top_level(name: str) -> str:
+    return ".".join(name.split(".")[:2])
+
+
+def test_the_checker_finds_a_cycle():
+    assert cycles({("a", "b"), ("b", "c"), ("c", "a"), ("c", "d")}) == [["a", "b", "c"]]
+    assert cycles({("a", "b"), ("b", "c")}) == []
+
+
+def test_the_graph_sees_the_known_layers():
+    edges = import_edges(module_names())
+    assert ("mlsgalerkin.integration.boundary", "mlsgalerkin.basis") in edges
+    assert ("mlsgalerkin.models.boundary_conditions", "mlsgalerkin.integration") in edges
+    assert ("mlsgalerkin.forms", "mlsgalerkin.basis") in edges
+
+
+def test_no_import_cycle_between_modules():
+    found = cycles(import_edges(module_names()))
+    assert not found, f"import cycles between modules: {found}"
+
+
+def test_no_import_cycle_between_top_level_packages():
+    edges = {(top_level(a), top_level(b)) for a, b in import_edges(module_names())}
+    found = cycles({(a, b) for a, b in edges if a != b})
+    assert not found, f"import cycles between mlsgalerkin's top-level modules/packages: {found}"
