@@ -9,14 +9,14 @@ plus wall particles come closest to the target sizes (default about 1e4, 4e4 and
 reported.
 
 Per size and thread count: a fresh :class:`~mlsgalerkin.simulation.Simulation`,
-``initialise()`` and a few warm-up steps (numba loads its disk cache on the first call), then a
-snapshot (``checkpoint_data``). A *block* is ``restore(snapshot)`` (not timed) followed by
-``sim.step(sim.state.dt_next)`` a fixed number of times (timed): every repetition performs
+``start()`` and a few warm-up steps (numba loads its disk cache on the first call), then a
+snapshot (``sim.snapshot()``). A *block* is ``restore(*snapshot)`` (not timed) followed by
+``sim.step(sim.time_step())`` a fixed number of times (timed): every repetition performs
 exactly the same steps, neighbour rebuilds included. The time is the best of several blocks
 (default 3). Blocks are a multiple of 20 steps, so each holds the same number of density-filter
 passes. Throughput = ``n_total × steps / best block time``.
 
-Stage split: ``sim.timer.seconds`` (cleared before each block) of the best block, grouped as
+Stage split: the fluid solver's ``timer.seconds`` (cleared before each block) of the best block, grouped as
 neighbours (``neighbors``), shape functions (``shape_functions``), integration
 (``integrate``) and forces (every other entry: velocity gradient, walls, pressure, internal
 force, viscosities, gravity, acceleration, density filter); *untimed* is the rest of the wall
@@ -66,7 +66,7 @@ PARTICLE_STEPS_PER_BLOCK = 3e6
 FILTER_EVERY = 20
 WARMUP_STEPS = 5
 QUICK_STEPS = 40
-#: Stage groups of ``sim.timer.seconds``; every other entry counts as "forces".
+#: Stage groups of the fluid solver's ``timer.seconds``; every other entry counts as "forces".
 GROUPS = {
     "neighbors": "neighbours", "shape_functions": "shape functions", "integrate": "integration",
 }
@@ -132,15 +132,16 @@ def group_split(seconds: dict[str, float], wall: float) -> dict[str, float]:
 def _time_block(sim, snapshot, steps: int) -> dict:
     """Restore the snapshot (not timed), then time ``steps`` steps."""
     sim.restore(*snapshot)
-    builds0 = sim.neighbor_builds
-    sim.timer.seconds.clear()
+    fluid = sim.solver("fluid")
+    builds0 = fluid.neighbor_builds
+    fluid.timer.seconds.clear()
     gc.collect()
     t0 = time.perf_counter()
     for _ in range(steps):
-        sim.step(sim.state.dt_next)
+        sim.step(sim.time_step())
     wall = time.perf_counter() - t0
-    return {"seconds": wall, "stages": dict(sim.timer.seconds),
-            "builds": sim.neighbor_builds - builds0, "t_phys": sim.state.t}
+    return {"seconds": wall, "stages": dict(fluid.timer.seconds),
+            "builds": fluid.neighbor_builds - builds0, "t_phys": sim.state.t}
 
 
 def _best_block(sim, snapshot, steps: int, repeats: int, attempts: int = 3, max_other: float = 0.2,
@@ -178,11 +179,11 @@ def _best_block(sim, snapshot, steps: int, repeats: int, attempts: int = 3, max_
 def _neighbor_build_time(sim, repeats: int = 3) -> float:
     from mlsgalerkin.neighbors import find_neighbors
 
-    s = sim.state
+    s = sim.state.fluid
     best = math.inf
     for _ in range(repeats):
         t0 = time.perf_counter()
-        find_neighbors(s.x, s.x, radius=sim.search_radius)
+        find_neighbors(s.x, s.x, radius=sim.solver("fluid").search_radius)
         best = min(best, time.perf_counter() - t0)
     return best
 
@@ -210,11 +211,11 @@ def run(
             case = f"2D dam break step, {nt} thread{'s' if nt > 1 else ''}"
             for ratio in ratios:
                 sim = make_simulation(ratio, skin)
-                sim.initialise()
+                sim.start()
                 for _ in range(WARMUP_STEPS):
-                    sim.step(sim.state.dt_next)
-                snapshot = sim.checkpoint_data()
-                s = sim.state
+                    sim.step(sim.time_step())
+                snapshot = sim.snapshot()
+                s = sim.state.fluid
                 n_steps = steps or steps_for(s.n)
                 blk, done, other = _best_block(sim, snapshot, n_steps, repeats, log=log)
                 t = blk["seconds"]
@@ -309,7 +310,7 @@ def markdown(rows: list[dict]) -> list[str]:
         for k in sorted(r["stages"], key=lambda k: -r["stages"][k]):
             if k not in names:
                 names.append(k)
-    md += ["", "Raw split (`sim.timer.seconds`), ms per step:", "",
+    md += ["", "Raw split (the fluid solver's `timer.seconds`), ms per step:", "",
            "| threads | particles | " + " | ".join(names) + " | untimed |",
            "|---:|---:|" + "---:|" * (len(names) + 1)]
     for r in rows:

@@ -326,11 +326,11 @@ def write_report(out: Path, prov: dict, nb_rows: list[dict], sf_rows: list[dict]
         md += _table(asm_rows, extra=False)
     if fluid_rows:
         md += ["", "## Fluid time step (2D dam break)", "",
-               "`Simulation(make_scene(dam_break.Parameters(dx=a/ratio)))`, `initialise()`,",
-               "5 warm-up steps, then `sim.step(sim.state.dt_next)` in blocks of a fixed number",
+               "`Simulation(make_scene(dam_break.Parameters(dx=a/ratio)))`, `start()`,",
+               "5 warm-up steps, then `sim.step(sim.time_step())` in blocks of a fixed number",
                "of steps, each block restored from the same snapshot (identical work); best of 3",
                "blocks. Particles = fluid + wall; *points/s* in the flatness table below means",
-               "particle-steps/s here. Stage split from `sim.timer.seconds`; *untimed* is the",
+               "particle-steps/s here. Stage split from the fluid solver's `timer.seconds`; *untimed* is the",
                "time-step limit, the skin check and Python between stages. The neighbour list has",
                "a skin and is rarely rebuilt this early in the collapse (column *neighbour",
                "builds/step*); the *rebuild every step* column adds one timed `find_neighbors`",

@@ -24,7 +24,6 @@ import dataclasses
 import importlib
 import importlib.util
 import math
-import pkgutil
 import re
 import sys
 from pathlib import Path
@@ -40,9 +39,7 @@ class ProblemError(ValueError):
 
 def shipped_problems() -> tuple[str, ...]:
     """Names of the problems shipped in :mod:`mlsgalerkin.problems`."""
-    import mlsgalerkin.problems as pkg
-
-    return tuple(sorted(m.name for m in pkgutil.iter_modules(pkg.__path__) if not m.name.startswith("_")))
+    return importlib.import_module("mlsgalerkin.problems").PROBLEMS
 
 
 def _check_module(mod: ModuleType, where: str) -> ModuleType:

@@ -8,9 +8,9 @@ edit it, and run it with ``mlsgalerkin run my_case.py``. :func:`mlsgalerkin.prob
 builds, runs and analyses one, as ``mlsgalerkin run`` does.
 """
 
-from mlsgalerkin.problem import load_problem as get_problem
-from mlsgalerkin.problem import run_problem, shipped_problems
+import pkgutil
 
-PROBLEMS = shipped_problems()
+#: The shipped problems' names (every public module of this package).
+PROBLEMS = tuple(sorted(m.name for m in pkgutil.iter_modules(__path__) if not m.name.startswith("_")))
 
-__all__ = ["PROBLEMS", "get_problem", "run_problem"]
+__all__ = ["PROBLEMS"]

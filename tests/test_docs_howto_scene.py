@@ -3,8 +3,9 @@
 Its ```python blocks are executed in order, in one namespace, in an empty temporary
 directory (as a reader would paste them); where a block is followed directly by a ```text
 block, that block is the output the page claims, and it must equal what the code printed.
-The ``mlsgalerkin ...`` lines of its ```bash blocks are run through the CLI entry point and
-must exit with status 0.
+A ```python file=NAME block is saved as NAME instead (a problem file), and the
+``mlsgalerkin ...`` lines of its ```bash blocks are run through the CLI entry point, in the
+page's order, and must exit with status 0.
 
 The examples are tiny (a few hundred particles), so they run on one numba thread: parallel
 threads only add overhead at that size and slow down badly on a loaded machine.
@@ -21,7 +22,7 @@ from pathlib import Path
 import pytest
 
 HOWTO = Path(__file__).resolve().parents[1] / "docs" / "howto" / "write_a_scene_and_an_effect.md"
-FENCE = re.compile(r"^```(\w*)\n(.*?)^```[ \t]*$", flags=re.S | re.M)
+FENCE = re.compile(r"^```(\w*)([^\n]*)\n(.*?)^```[ \t]*$", flags=re.S | re.M)
 
 
 @pytest.fixture
@@ -36,64 +37,73 @@ def one_numba_thread():
         numba.set_num_threads(before)
 
 
-def fenced_blocks(text: str) -> list[tuple[str, str, int, int]]:
-    """``(language, code, start, end)`` of every fenced block, in order."""
-    return [(m.group(1), m.group(2), m.start(), m.end()) for m in FENCE.finditer(text)]
+def fenced_blocks(text: str) -> list[tuple[str, str, str, int, int]]:
+    """``(language, info, code, start, end)`` of every fenced block, in order (``info`` is what
+    follows the language on the opening line, e.g. ``file=my_case.py``)."""
+    return [(m.group(1), m.group(2).strip(), m.group(3), m.start(), m.end()) for m in FENCE.finditer(text)]
 
 
-def python_blocks_with_output(text: str) -> list[tuple[str, str | None, int]]:
-    """``(code, claimed output or None, line number)`` of each python block."""
+def steps(text: str) -> list[tuple[str, str, str | None, int]]:
+    """The page as a reader follows it: ``(kind, payload, claimed output, line)`` with kind
+    ``"python"`` (run it), ``"file"`` (payload ``name\ncode``: save it) or ``"command"`` (an
+    ``mlsgalerkin ...`` line of a bash block)."""
     blocks = fenced_blocks(text)
     out = []
-    for k, (lang, code, start, end) in enumerate(blocks):
-        if lang != "python":
-            continue
-        claimed = None
-        if k + 1 < len(blocks):
-            nlang, ncode, nstart, _ = blocks[k + 1]
-            if nlang == "text" and text[end:nstart].strip() == "":
-                claimed = ncode
-        out.append((code, claimed, text.count("\n", 0, start) + 1))
+    for k, (lang, info, code, start, end) in enumerate(blocks):
+        line = text.count("\n", 0, start) + 1
+        if lang == "python" and info.startswith("file="):
+            out.append(("file", info[len("file="):] + "\n" + code, None, line))
+        elif lang == "python":
+            claimed = None
+            if k + 1 < len(blocks):
+                nlang, _, ncode, nstart, _ = blocks[k + 1]
+                if nlang == "text" and text[end:nstart].strip() == "":
+                    claimed = ncode
+            out.append(("python", code, claimed, line))
+        elif lang == "bash":
+            out += [("command", c.strip(), None, line) for c in code.splitlines() if c.strip().startswith("mlsgalerkin ")]
     return out
 
 
-def test_howto_python_blocks_run_and_print_what_the_page_says(tmp_path, monkeypatch, one_numba_thread):
+def test_howto_runs_as_written(tmp_path, monkeypatch, capsys, one_numba_thread):
+    """Every python block runs and prints what the page says, the file blocks are saved, and the
+    ``mlsgalerkin`` commands exit with 0 and write their run directory — in the page's order."""
+    from mlsgalerkin.cli import main
+
     text = HOWTO.read_text(encoding="utf-8")
-    blocks = python_blocks_with_output(text)
-    assert len(blocks) >= 6, "the how-to lost its examples"
-    assert sum(claimed is not None for _, claimed, _ in blocks) >= 5
+    todo = steps(text)
+    assert sum(kind == "python" for kind, *_ in todo) >= 8, "the how-to lost its examples"
+    assert sum(claimed is not None for *_, claimed, _ in todo) >= 7
+    assert any(kind == "file" for kind, *_ in todo)
+    assert any(kind == "command" and p.startswith("mlsgalerkin run my_case.py") for kind, p, *_ in todo)
     monkeypatch.chdir(tmp_path)
     namespace: dict = {"__name__": "__howto__"}
-    for code, claimed, line in blocks:
+    for kind, payload, claimed, line in todo:
+        if kind == "file":
+            name, code = payload.split("\n", 1)
+            (tmp_path / name).write_text(code)
+            continue
+        if kind == "command":
+            capsys.readouterr()
+            assert main(shlex.split(payload)[1:]) == 0, f"{payload} (line {line})"
+            out = capsys.readouterr().out
+            if payload.startswith("mlsgalerkin run "):
+                args = shlex.split(payload)
+                run_dir = Path(args[args.index("--out") + 1])
+                for name in ("timeseries.csv", "particles.pvd", "summary.json"):
+                    assert (run_dir / name).is_file(), name
+                assert f"output: {run_dir}/" in out
+            if payload == "mlsgalerkin problems":
+                assert "hydrostatic" in out and "wave_maker" in out
+            continue
         buf = io.StringIO()
         with contextlib.redirect_stdout(buf):
             # dont_inherit: run as pasted, without this file's ``from __future__ import annotations``
-            exec(compile(code, f"{HOWTO.name}:{line}", "exec", dont_inherit=True), namespace)
+            exec(compile(payload, f"{HOWTO.name}:{line}", "exec", dont_inherit=True), namespace)
         if claimed is not None:
             printed = buf.getvalue().rstrip("\n").splitlines()
             expected = claimed.rstrip("\n").splitlines()
             assert printed == expected, f"block at line {line} of {HOWTO.name} printed:\n{buf.getvalue()}"
-
-
-def test_howto_cli_commands_run(tmp_path, monkeypatch, capsys, one_numba_thread):
-    from mlsgalerkin.cli import main
-
-    text = HOWTO.read_text(encoding="utf-8")
-    commands = [line.strip() for lang, code, _, _ in fenced_blocks(text) if lang == "bash"
-                for line in code.splitlines() if line.strip().startswith("mlsgalerkin ")]
-    assert any(c.startswith("mlsgalerkin run ") for c in commands)
-    monkeypatch.chdir(tmp_path)
-    for command in commands:
-        assert main(shlex.split(command)[1:]) == 0, command
-        out = capsys.readouterr().out
-        if command.startswith("mlsgalerkin run "):
-            args = shlex.split(command)
-            run_dir = Path(args[args.index("--out") + 1])
-            for name in ("timeseries.csv", "particles.pvd", "summary.json"):
-                assert (run_dir / name).is_file(), name
-            assert f"output: {run_dir}/" in out
-        if command == "mlsgalerkin problems":
-            assert "hydrostatic" in out
 
 
 def test_relative_links_of_the_fluid_pages_resolve():

@@ -1,11 +1,26 @@
-"""Tait equation of state and the explicit time-step limits."""
+"""Tait equation of state (one implementation for the effect, the initial state and the energy)
+and the explicit time-step limits."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from mlsgalerkin.fluid import MachNumberWarning, TaitEOS, acoustic_limit, force_limit, viscous_limit
+import math
+
+from mlsgalerkin.fluid import (
+    MachNumberWarning,
+    TaitEOS,
+    acoustic_limit,
+    bulk_viscosity_limit,
+    force_limit,
+    hydrostatic_density,
+    pair_viscosity_limit,
+    tait_density,
+    tait_pressure,
+    tait_stored_energy,
+    viscous_limit,
+)
 
 
 def test_tait_reference_state_inverse_and_sound_speed():
@@ -41,16 +56,43 @@ def test_density_below_cavitation_limit_raises():
         eos.density(-2 * eos.B)
 
 
+def test_hydrostatic_density_per_phase_and_stored_energy():
+    rho0 = np.array([1000.0, 1500.0])
+    depth = np.array([0.3, 0.3])
+    rho = hydrostatic_density(rho0, depth, 9.81, 10.0)
+    # p(rho) gives back the hydrostatic pressure of each phase
+    np.testing.assert_allclose(tait_pressure(rho / rho0, rho0, 10.0), rho0 * 9.81 * depth, rtol=1e-12)
+    np.testing.assert_allclose(tait_density(rho0 * 9.81 * depth, rho0, 10.0), rho, rtol=0, atol=0)
+    # the stored energy is the work of compression: d e / d rho = p / rho^2 per unit mass
+    r = np.linspace(0.97, 1.03, 7)
+    M = np.ones_like(r)
+    e = tait_stored_energy(M, r, 10.0)
+    assert e[3] == 0.0 and np.all(e >= 0)
+    d = 1e-6
+    de = (tait_stored_energy(M, r + d, 10.0) - tait_stored_energy(M, r - d, 10.0)) / (2 * d)  # per unit ratio
+    np.testing.assert_allclose(de, tait_pressure(r, 1.0, 10.0) / r**2, rtol=1e-6, atol=1e-9)
+    with pytest.raises(ValueError, match="cavitation"):
+        tait_density(-1e9, 1000.0, 10.0)
+
+
 def test_time_step_limits():
     h = np.full(4, 0.01)
     v = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, -2.0], [0.0, 0.0]])
-    assert acoustic_limit(h, 20.0, v) == pytest.approx(0.4 * 0.01 / 22.0)
-    assert viscous_limit(h, 1e-6) == pytest.approx(0.125 * 1e-4 / 1e-6)
-    assert viscous_limit(h, 0.0) == np.inf
+    assert acoustic_limit(h, np.full(4, 20.0), v) == pytest.approx(0.4 * 0.01 / 22.0)
+    assert viscous_limit(h, np.full(4, 1e-6)) == pytest.approx(0.125 * 1e-4 / 1e-6)
+    assert viscous_limit(h, np.zeros(4)) == np.inf
+    assert bulk_viscosity_limit(h, np.full(4, 20.0), linear=0.5) == pytest.approx(0.125 * 0.01 / 10.0)
+    assert bulk_viscosity_limit(h, np.full(4, 20.0), linear=0.0) == np.inf
     a = np.array([[0.0, -9.81]] * 4)
     assert force_limit(h, a) == pytest.approx(0.25 * np.sqrt(0.01 / 9.81))
     assert force_limit(h, np.zeros((4, 2))) == np.inf
-    with pytest.raises(ValueError, match="not finite at particle 2"):
-        force_limit(h, np.array([[0, 0], [0, 0], [np.nan, 0], [0, 0]], dtype=float))
-    with pytest.raises(ValueError, match="h must be positive"):
-        acoustic_limit(np.array([0.01, 0.0]), 20.0)
+    hh, c = np.array([0.01, 0.012]), np.array([20.0, 25.0])
+    dt = pair_viscosity_limit(hh, c, alpha=0.1, beta=1.0, max_phi=2.0)
+    expected = 0.4 * min(0.01 / (20 + 0.6 * (2.0 + 2.0)), 0.012 / (25 + 0.6 * (2.5 + 2.0)))
+    assert dt == pytest.approx(expected, rel=1e-15)
+    # a non-finite state gives a NaN limit (the watchdog names the particle), not an exception
+    c_bad = np.array([20.0, np.nan])
+    assert math.isnan(pair_viscosity_limit(hh, c_bad, 0.1, 0.0, 0.0))
+    assert math.isnan(acoustic_limit(hh, c_bad, np.zeros((2, 2))))
+    assert all(f(np.zeros(0), *args) == np.inf for f, args in [
+        (acoustic_limit, (np.zeros(0), np.zeros((0, 2)))), (pair_viscosity_limit, (np.zeros(0), 0.1, 0.0, 0.0))])

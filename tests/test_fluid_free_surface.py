@@ -5,17 +5,21 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mlsgalerkin.fluid import free_surface as fs
 from mlsgalerkin.fluid.free_surface import (
     detect_circle_coverage,
     detect_circle_coverage_reference,
     detect_free_surface,
     detect_neighbour_deficit,
-    free_surface_method_comparison,
     surface_indicators,
     surface_indicators_reference,
 )
 from mlsgalerkin.neighbors import NeighborTable, find_neighbors
+from verification.free_surface_comparison import (
+    free_surface_method_comparison,
+    hexagonal_block,
+    lattice_block,
+    ring_disc,
+)
 
 METHODS = ("circle", "cheap")
 
@@ -25,7 +29,7 @@ def _table(x, radius=2.2):
 
 
 def _block(n_side, spacing=1.0, hole=0):
-    x, exact = fs._lattice_block(n_side, hole)
+    x, exact = lattice_block(n_side, hole)
     return x * spacing, exact
 
 
@@ -54,7 +58,7 @@ def test_larger_search_radius_changes_nothing(method):
 
 @pytest.mark.parametrize("method", METHODS)
 def test_disc_of_rings_outer_ring(method):
-    x, exact = fs._ring_disc(8)
+    x, exact = ring_disc(8)
     assert np.array_equal(detect_free_surface(x, _table(x), 1.0, method=method), exact)
 
 
@@ -94,7 +98,7 @@ def test_circle_radius_geometry():
 
 def test_hexagonal_zigzag_recess():
     # recessed particles of a zigzag edge are covered for r > r0, flagged for r <= r0
-    x, exact = fs._hexagonal_block(12)
+    x, exact = hexagonal_block(12)
     table = _table(x)
     wide = detect_circle_coverage(x, table, 1.0)
     narrow = detect_circle_coverage(x, table, 1.0, radius_factor=0.95)

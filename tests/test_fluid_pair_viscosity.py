@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from mlsgalerkin.fluid.pair_viscosity import (
-    monaghan_time_step_limit,
     monaghan_viscosity_force,
     monaghan_viscosity_force_reference,
 )
@@ -157,21 +156,6 @@ def test_pairs_beyond_support_ignored():
     table = find_neighbors(x, x, radius=1.0)
     f, phi = monaghan_viscosity_force(x, v, 1000.0, 20.0, 0.1, 0.012, table, alpha=1.0, beta=1.0)
     assert not f.any() and phi == 0.0
-
-
-def test_time_step_limit():
-    h = np.array([0.01, 0.012])
-    c = np.array([20.0, 25.0])
-    dt = monaghan_time_step_limit(h, c, alpha=0.1, beta=1.0, max_phi=2.0)
-    expected = 0.4 * min(0.01 / (20 + 0.6 * (2.0 + 2.0)), 0.012 / (25 + 0.6 * (2.5 + 2.0)))
-    assert dt == pytest.approx(expected, rel=1e-15)
-    dt0 = monaghan_time_step_limit(0.01, 20.0, 0.0, 0.0, 0.0, factor=1.0)
-    assert dt0 == pytest.approx(0.01 / 20)
-    bads = [dict(h=0.0), dict(c=-1.0), dict(alpha=-1.0), dict(max_phi=np.nan), dict(factor=0.0)]
-    for bad in bads:
-        args = dict(h=0.01, c=20.0, alpha=0.1, beta=0.0, max_phi=1.0) | bad
-        with pytest.raises(ValueError):
-            monaghan_time_step_limit(**args)
 
 
 def test_bad_input(rng):

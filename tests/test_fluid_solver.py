@@ -70,14 +70,14 @@ def tank_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("tank")
     scene = hydrostatic_tank(output=Output(every=0.1))
     sim = Simulation(scene)
-    M0 = sim.state.M[sim.state.fluid].copy()
+    M0 = sim.state.fluid.M[sim.state.fluid.fluid].copy()
     res = sim.run(out=out, progress=False)
     return res, M0, scene
 
 
 def test_total_mass_is_exact(tank_run):
     res, M0, _ = tank_run
-    s = res.state
+    s = res.state.fluid
     assert np.array_equal(s.M[s.fluid], M0)  # particle masses never change
     m = res.timeseries["total_mass"]
     assert len(m) > 800 and np.all(m == m[0])  # Σ M identical to the bit at every step
@@ -85,7 +85,7 @@ def test_total_mass_is_exact(tank_run):
 
 def test_hydrostatic_tank_stays_at_rest(tank_run):
     res, _, _ = tank_run
-    s, ts = res.state, res.timeseries
+    s, ts = res.state.fluid, res.timeseries
     f = s.fluid
     H, W, dx = 0.4, 0.4, 0.02
     # Measured: largest speed 0.89 % of sqrt(gH) (0.0177 m/s, the free-surface corner particle
@@ -122,8 +122,8 @@ def test_output_files(tank_run):
     assert all(p.is_file() for _, p in frames)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["wall_time_s"] > 0
-    assert "tait_pressure" in summary["time_per_stage_s"] and "walls" in summary["time_per_stage_s"]
-    d = summary["diagnostics"]
+    assert "tait_pressure" in summary["fluid"]["time_per_stage_s"] and "walls" in summary["fluid"]["time_per_stage_s"]
+    d = summary["fluid"]["diagnostics"]
     for key in ("shape_function_fallback_points", "lumped_mass_floored", "neighbour_rebuilds",
                 "total_mass_kg", "kinetic_energy_J", "momentum"):
         assert key in d
@@ -141,7 +141,7 @@ def test_momentum_conserved_with_particle_mass(rng):
     scene = Scene([fl], [TaitPressure(10.0), MonaghanViscosity(0.1)], t_end=1.0, mass="particle")
     sim = Simulation(scene)
     res = sim.run(progress=False, max_steps=200)
-    s = res.state
+    s = res.state.fluid
     assert s.step == 200
     M = s.M[s.fluid]
     P0 = M @ fl.velocity
@@ -158,8 +158,8 @@ def test_lumped_mass_force_sums_to_zero(rng):
     fl = FluidBody.block("water", (0.0, 0.0), (0.3, 0.3), 0.02, WATER)
     fl.velocity[:] = rng.normal(0.0, 0.1, fl.velocity.shape)
     sim = Simulation(Scene([fl], [TaitPressure(10.0), MonaghanViscosity(0.1)], t_end=1.0))
-    sim.initialise()
-    s = sim.state
+    sim.start()
+    s = sim.state.fluid
     worst = 0.0
     for _ in range(200):
         sim.step(s.dt_next)
@@ -172,8 +172,8 @@ def test_uniform_translation_stays_uniform():
     U = np.array([0.5, 0.2])
     scene = free_block(size=0.3, velocity=U, effects=[MonaghanViscosity(0.1)], c0=10.0, t_end=0.2)
     sim = Simulation(scene)
-    x0 = sim.state.x.copy()
-    s = sim.run(progress=False).state
+    x0 = sim.state.fluid.x.copy()
+    s = sim.run(progress=False).state.fluid
     assert s.step > 150
     # measured: velocity and density unchanged to the bit, positions to 5e-15 m
     np.testing.assert_allclose(s.v, np.broadcast_to(U, s.v.shape), rtol=0, atol=1e-12)
@@ -190,8 +190,8 @@ def test_free_fall_is_exact(integrator, mass):
     v0 = np.array([0.3, 0.1])
     scene = free_block(velocity=v0, gravity=True, integrator=integrator, mass=mass)
     sim = Simulation(scene)
-    x0 = sim.state.x.copy()
-    s = sim.run(progress=False).state
+    x0 = sim.state.fluid.x.copy()
+    s = sim.run(progress=False).state.fluid
     assert s.t == pytest.approx(0.05, abs=1e-15)
     np.testing.assert_allclose(s.x, x0 + v0 * s.t + 0.5 * GVEC * s.t**2, rtol=0, atol=1e-13)
     np.testing.assert_allclose(s.v, np.broadcast_to(v0 + GVEC * s.t, s.v.shape), rtol=0, atol=1e-13)
@@ -200,7 +200,7 @@ def test_free_fall_is_exact(integrator, mass):
 
 def test_predictor_corrector_agrees_with_kdk():
     v0 = (0.3, 0.1)
-    runs = [Simulation(free_block(velocity=v0, gravity=True, integrator=i)).run(progress=False).state
+    runs = [Simulation(free_block(velocity=v0, gravity=True, integrator=i)).run(progress=False).state.fluid
             for i in ("kdk", "predictor_corrector")]
     assert runs[0].step == runs[1].step
     np.testing.assert_allclose(runs[0].x, runs[1].x, rtol=0, atol=1e-14)
@@ -214,9 +214,9 @@ def test_consistent_mass_gives_gravity_acceleration():
     without, 9e-11 with the Jacobi preconditioner) and 3e-9 after one step."""
     v0 = np.array([0.3, 0.1])
     sim = Simulation(free_block(velocity=v0, gravity=True, mass="consistent"))
-    x0 = sim.state.x.copy()
-    sim.initialise()
-    s = sim.state
+    x0 = sim.state.fluid.x.copy()
+    sim.start()
+    s = sim.state.fluid
     np.testing.assert_allclose(s.a, np.broadcast_to(GVEC, s.a.shape), rtol=0, atol=1e-7 * G)
     sim.step(s.dt_next)
     np.testing.assert_allclose(s.a, np.broadcast_to(GVEC, s.a.shape), rtol=0, atol=1e-6 * G)
@@ -233,10 +233,10 @@ def test_consistent_mass_is_ill_conditioned_and_the_watchdog_stops_it():
     from mlsgalerkin.assembly import consistent_mass
 
     sim = Simulation(free_block(velocity=(0.3, 0.1), gravity=True, mass="consistent"))
-    sim.initialise()
-    Mc = consistent_mass(sim.state.table, sim.state.M).toarray()
+    sim.start()
+    Mc = consistent_mass(sim.state.fluid.table, sim.state.fluid.M).toarray()
     eig = np.linalg.eigvalsh(Mc)
-    assert eig.min() < 1e-3 * sim.state.M.mean()  # measured ~5e-6: near-singular
+    assert eig.min() < 1e-3 * sim.state.fluid.M.mean()  # measured ~5e-6: near-singular
     with pytest.raises(SimulationDiverged) as info:
         sim.run(progress=False)
     assert info.value.diagnosis["step"] < 100 and info.value.diagnosis["quantity"]
@@ -274,14 +274,22 @@ def test_watchdog_names_step_particle_and_quantity(tmp_path):
     assert err.checkpoint.is_file() and str(err.checkpoint) in msg
     arrays, meta = load_checkpoint(err.checkpoint)
     assert meta["step"] == 4
-    assert all(np.all(np.isfinite(arrays[k])) for k in ("x", "v", "rho", "a"))
+    assert all(np.all(np.isfinite(arrays[f"fluid__{k}"])) for k in ("x", "v", "rho", "a"))
     # the time series is flushed up to the last healthy step
     ts = read_timeseries(tmp_path / "timeseries.csv")
     assert ts["step"][-1] == 4
+    # the loop's end wrote the summary of the stopped run, with the diagnosis
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["status"] == "diverged" and summary["diagnosis"]["particle"] == 7
+    assert summary["steps"] == 5 and summary["fluid"]["particles"]["fluid"] == s_n_fluid(scene)
     # the last good state restarts in a scene without the poison
     clean = free_block(gravity=True, t_end=0.01)
-    s = Simulation(clean).run(out=tmp_path, restart=err.checkpoint, progress=False).state
+    s = Simulation(clean).run(out=tmp_path, restart=err.checkpoint, progress=False).state.fluid
     assert s.t == pytest.approx(0.01) and np.all(np.isfinite(s.v))
+
+
+def s_n_fluid(scene: Scene) -> int:
+    return sum(b.n for b in scene.bodies_of(FluidBody))
 
 
 def test_watchdog_speed_limit():
@@ -308,15 +316,15 @@ def _restart_scene(method: str = "mls", integrator: str = "kdk") -> Scene:
 
 def _assert_same_run(a, b, dir_a: Path, dir_b: Path) -> None:
     for k in ("x", "v", "rho", "p", "M", "a"):
-        assert np.array_equal(getattr(a.state, k), getattr(b.state, k)), k
-    assert np.array_equal(a.state.extra["free_surface"], b.state.extra["free_surface"])
+        assert np.array_equal(getattr(a.state.fluid, k), getattr(b.state.fluid, k)), k
+    assert np.array_equal(a.state.fluid.extra["free_surface"], b.state.fluid.extra["free_surface"])
     assert a.state.step == b.state.step and a.state.t == b.state.t
     ta, tb = read_timeseries(dir_a / "timeseries.csv"), read_timeseries(dir_b / "timeseries.csv")
     assert list(ta) == list(tb)
     for k in ta:
         assert np.array_equal(ta[k], tb[k]), k
-    assert a.summary["diagnostics"] == b.summary["diagnostics"]
-    assert a.summary["effect_reports"] == b.summary["effect_reports"]
+    assert a.summary["fluid"]["diagnostics"] == b.summary["fluid"]["diagnostics"]
+    assert a.summary["fluid"]["effect_reports"] == b.summary["fluid"]["effect_reports"]
 
 
 RESTART_CASES = [("mls", "kdk"), ("rkpm", "kdk"), ("mls", "predictor_corrector")]
@@ -329,7 +337,7 @@ def uninterrupted(request, tmp_path_factory):
     stores (``table_volumes``) — ρ has had a half-step update since."""
     out = tmp_path_factory.mktemp("uninterrupted")
     res = Simulation(_restart_scene(*request.param)).run(out=out, progress=False)
-    assert res.summary["steps"] > 90 and res.summary["diagnostics"]["neighbour_rebuilds"] > 10
+    assert res.summary["steps"] > 90 and res.summary["fluid"]["diagnostics"]["neighbour_rebuilds"] > 10
     return request.param, res, out
 
 
@@ -372,11 +380,11 @@ def test_splash_isolated_particles_fly_ballistically():
     fl = FluidBody("water", np.vstack([block, iso]), dx, WATER, velocity=v)
     scene = Scene([fl], [TaitPressure(20.0), Gravity(), MonaghanViscosity(0.1)], t_end=0.1)
     res = Simulation(scene).run(progress=False)
-    s = res.state
+    s = res.state.fluid
     assert np.all(np.isfinite(s.x)) and np.all(np.isfinite(s.v)) and np.all(np.isfinite(s.rho))
     assert s.table.order[nb:nb + 3].tolist() == [0, 0, 0]  # single and pair: Shepard
     assert s.table.order[nb + 3:].tolist() == [1, 1, 1]    # a triangle supports linear MLS
-    assert res.summary["diagnostics"]["shape_function_fallback_points"] >= 3 * (s.step + 1)
+    assert res.summary["fluid"]["diagnostics"]["shape_function_fallback_points"] >= 3 * (s.step + 1)
     t = s.t
     np.testing.assert_allclose(s.x[nb:], iso + v0 * t + 0.5 * GVEC * t**2, rtol=0, atol=1e-13)
     v_exact = np.broadcast_to(v0 + GVEC * t, (len(iso), 2))
@@ -389,12 +397,12 @@ def test_expansion_reports_tensile_instability():
     fl.velocity[:] = 0.5 * (fl.positions - 0.1)  # uniform expansion, ∇·v = 1 /s
     scene = Scene([fl], [TaitPressure(20.0), MonaghanViscosity(0.1)], t_end=0.02)
     res = Simulation(scene).run(progress=False)
-    ti = res.summary["effect_reports"]["tait_pressure"]["tensile_instability"]
+    ti = res.summary["fluid"]["effect_reports"]["tait_pressure"]["tensile_instability"]
     # measured: min pressure −1.5 kPa, all particles in tension
     assert ti["min_pressure_Pa"] < -500.0
     assert ti["max_fraction_negative"] > 0.5
     assert ti["steps_with_negative_pressure"] > 0 and ti["mode"] == "allow"
-    assert res.state.p.min() < 0
+    assert res.state.fluid.p.min() < 0
 
 
 def test_collinear_row_runs_without_nan(rng):
@@ -406,18 +414,19 @@ def test_collinear_row_runs_without_nan(rng):
     fl = FluidBody("row", x, dx, WATER, velocity=v)
     scene = Scene([fl], [TaitPressure(20.0), Gravity(), MonaghanViscosity(0.1)], t_end=0.05)
     res = Simulation(scene).run(progress=False)
-    s = res.state
+    s = res.state.fluid
     assert s.step > 50
     for arr in (s.x, s.v, s.rho, s.p, s.a):
         assert np.all(np.isfinite(arr))
     assert np.all(s.table.order == 0)
-    assert res.summary["diagnostics"]["shape_function_fallback_points"] == n * (s.step + 1)
+    assert res.summary["fluid"]["diagnostics"]["shape_function_fallback_points"] == n * (s.step + 1)
     assert 0.98 < s.rho.min() / 1000.0 and s.rho.max() / 1000.0 < 1.02  # measured 0.997–1.0045
 
 
 def _tait_internal_energy(c0: float, gamma: float = 7.0):
     """Σ M e(ρ) with e = ∫ p/ρ² dρ = (B/ρ0) [r^(γ−1)/(γ−1) + 1/r − γ/(γ−1)], r = ρ/ρ0."""
-    def energy(s) -> float:
+    def energy(state) -> float:
+        s = state.fluid
         f = s.fluid
         r = s.rho[f] / s.rho0[f]
         B = s.rho0[f] * c0**2 / gamma
@@ -452,7 +461,7 @@ def test_drop_impact_smoke(tmp_path):
     scene = Scene([pool, drop, walls], effects, t_end=0.03,
                   probes=[Probe("internal_energy", _tait_internal_energy(c0))])
     res = Simulation(scene).run(out=tmp_path, progress=False)  # raises if the watchdog fires
-    s, ts = res.state, res.timeseries
+    s, ts = res.state.fluid, res.timeseries
     for arr in (s.x, s.v, s.rho, s.p):
         assert np.all(np.isfinite(arr))
     assert np.all(ts["total_mass"] == ts["total_mass"][0])
@@ -483,7 +492,7 @@ def test_long_hydrostatic_run_kinetic_energy_bounded(tmp_path):
     assert ke.max() < 1e-4 * scale
     late = ts["time"] > 5.0
     assert ke[late].max() < ke[~late].max()  # no growth in the second half
-    s = res.state
+    s = res.state.fluid
     assert np.all((s.x[s.fluid, 0] > 0) & (s.x[s.fluid, 0] < 0.4) & (s.x[s.fluid, 1] > 0))
 
 

@@ -13,7 +13,10 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-PACKAGE = Path(__file__).resolve().parents[1] / "mlsgalerkin"
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "mlsgalerkin"
+#: Folders installed under another name (pyproject's package-dir): the shipped problems.
+MAPPED = {ROOT / "problems": "mlsgalerkin.problems"}
 
 
 def module_names() -> dict[str, Path]:
@@ -23,6 +26,12 @@ def module_names() -> dict[str, Path]:
         if parts[-1] == "__init__":
             parts = parts[:-1]
         out[".".join(parts)] = path
+    for folder, package in MAPPED.items():
+        for path in sorted(folder.rglob("*.py")):
+            parts = [package] + list(path.relative_to(folder).with_suffix("").parts)
+            if parts[-1] == "__init__":
+                parts = parts[:-1]
+            out[".".join(parts)] = path
     return out
 
 
@@ -137,3 +146,40 @@ def test_no_import_cycle_between_top_level_packages():
     edges = {(top_level(a), top_level(b)) for a, b in import_edges(module_names())}
     found = cycles({(a, b) for a, b in edges if a != b})
     assert not found, f"import cycles between mlsgalerkin's top-level modules/packages: {found}"
+
+
+def test_io_is_a_bottom_layer():
+    """io/ (files, checkpoints, frames, pictures) imports nothing from the solvers, the run loop
+    or the studies: everything can write files, files depend on nothing above them."""
+    forbidden = ("mlsgalerkin.fluid", "mlsgalerkin.simulation", "mlsgalerkin.studies", "mlsgalerkin.scene",
+                 "mlsgalerkin.monitors", "mlsgalerkin.dynamics", "mlsgalerkin.problem")
+    bad = sorted((a, b) for a, b in import_edges(module_names())
+                 if a.startswith("mlsgalerkin.io") and b.startswith(forbidden))
+    assert not bad, f"io imports from higher layers: {bad}"
+
+
+def test_shipped_problems_use_only_the_public_api():
+    """A problem copied out of the package must run: no private names of mlsgalerkin imported."""
+    bad = []
+    for name, path in module_names().items():
+        if not name.startswith("mlsgalerkin.problems"):
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("mlsgalerkin"):
+                mods = node.module.split(".")
+                names = [a.name for a in node.names]
+                if any(m.startswith("_") for m in mods) or any(n.startswith("_") for n in names):
+                    bad.append(f"{path.name}: from {node.module} import {', '.join(names)}")
+                if node.module.startswith("mlsgalerkin.problems"):
+                    bad.append(f"{path.name}: imports another shipped problem ({node.module})")
+    assert not bad, bad
+
+
+def test_the_run_loop_knows_no_physics():
+    """simulation, scene, dynamics and monitors import nothing from fluid (or a structure package)."""
+    layer = ("mlsgalerkin.simulation", "mlsgalerkin.scene", "mlsgalerkin.dynamics", "mlsgalerkin.monitors",
+             "mlsgalerkin.motion")
+    bad = sorted((a, b) for a, b in import_edges(module_names())
+                 if a.startswith(layer) and b.startswith(("mlsgalerkin.fluid", "mlsgalerkin.problems")))
+    assert not bad, f"the run loop imports physics: {bad}"

@@ -1,17 +1,27 @@
-"""Smoke runs of every problem (its SMOKE size) through run_problem and the command line."""
+"""Smoke runs of every shipped problem (its SMOKE size) through run_problem and the command line,
+a user's own problem file, and ``python -m mlsgalerkin``."""
 
 import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from mlsgalerkin.cli import main
-from mlsgalerkin.problems import PROBLEMS, get_problem, run_problem
+from mlsgalerkin.problem import ProblemError, load_problem, parse_overrides, run_problem
+from mlsgalerkin.problems import PROBLEMS
+
+
+def test_every_shipped_module_is_listed():
+    assert set(PROBLEMS) >= {"hydrostatic", "dam_break", "gravity_current", "drop_impact", "wave_maker"}
 
 
 @pytest.mark.parametrize("name", PROBLEMS)
 def test_problem_smoke_run_writes_outputs(name, tmp_path):
-    mod = get_problem(name)
+    mod = load_problem(name)
     overrides = dict(mod.SMOKE)
     if "gif" in {f for f in mod.Parameters.__dataclass_fields__}:
         overrides["gif"] = False
@@ -20,6 +30,7 @@ def test_problem_smoke_run_writes_outputs(name, tmp_path):
     for f in ("timeseries.csv", "particles.pvd", "summary.json"):
         assert (tmp_path / f).is_file()
     summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["status"] == "completed"
     assert summary["results"]["headline"] == results["headline"]
     assert summary["wall_time_s"] > 0 and summary["steps"] > 0
     ts = result.timeseries
@@ -47,6 +58,19 @@ def test_cli_run_rejects_unknown_parameter(tmp_path, capsys):
     assert "colum_width" in err and "column_width" in err  # names the bad one and lists valid ones
 
 
+@pytest.mark.parametrize("value, expected", [("true", True), ("No", False), ("1", True), ("off", False)])
+def test_boolean_parameters_are_read_strictly(value, expected):
+    mod = load_problem("gravity_current")
+    assert parse_overrides(mod.Parameters, {"lid": value}).lid is expected
+
+
+@pytest.mark.parametrize("name, value", [("lid", "ture"), ("dx", "abc"), ("depth", "inf"), ("dx", "nan")])
+def test_unreadable_parameter_values_are_refused(name, value):
+    mod = load_problem("gravity_current")
+    with pytest.raises(ProblemError, match=f"parameter {name}"):
+        parse_overrides(mod.Parameters, {name: value})
+
+
 def test_cli_restart_continues_latest_checkpoint(tmp_path, capsys):
     out = tmp_path / "hs"
     args = ["run", "hydrostatic", "--dx", "0.05", "--out", str(out), "--no-progress"]
@@ -55,3 +79,50 @@ def test_cli_restart_continues_latest_checkpoint(tmp_path, capsys):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["t_end_s"] == pytest.approx(0.04)
     assert summary["steps_this_run"] < summary["steps"]
+
+
+# ------------------------------------------------------------------ a user's own problem file
+def test_a_copied_shipped_problem_runs_as_a_file(tmp_path, capsys):
+    """The starting point of a user's case: copy a shipped problem out of the package, edit it,
+    run it by path. It needs only the public API."""
+    src = Path(load_problem("hydrostatic").__file__)
+    mine = tmp_path / "my_tank.py"
+    shutil.copyfile(src, mine)
+    mine.write_text(mine.read_text().replace('name="hydrostatic"', 'name="my_tank"'))
+    out = tmp_path / "run"
+    code = main(["run", str(mine), "--dx", "0.05", "--t-end", "0.05", "--out", str(out), "--no-progress"])
+    assert code == 0, capsys.readouterr().err
+    text = capsys.readouterr().out
+    assert text.startswith("my_tank:") and "pressure RMS error" in text
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["scene"] == "my_tank" and summary["status"] == "completed"
+    assert summary["parameters"]["dx"] == 0.05
+
+
+def test_bad_problem_files_get_clear_errors(tmp_path, capsys):
+    assert main(["run", str(tmp_path / "missing.py"), "--no-progress"]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    broken = tmp_path / "broken.py"
+    broken.write_text("import numpy as np\nx = 1 +\n")
+    assert main(["run", str(broken), "--no-progress"]) == 2
+    assert "could not import the problem file" in capsys.readouterr().err
+    empty = tmp_path / "empty_case.py"
+    empty.write_text('"""Not a problem."""\n')
+    assert main(["run", str(empty), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "Parameters" in err and "make_scene" in err
+    assert main(["run", "no_such_problem", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown problem 'no_such_problem'" in err and "dam_break" in err
+
+
+# ------------------------------------------------------------------ the entry points
+def test_python_dash_m_and_version():
+    import mlsgalerkin
+
+    done = subprocess.run([sys.executable, "-m", "mlsgalerkin", "--version"], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0 and done.stdout.strip() == f"mlsgalerkin {mlsgalerkin.__version__}"
+    done = subprocess.run([sys.executable, "-m", "mlsgalerkin", "problems"], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0 and "wave_maker" in done.stdout and "my_case.py" in done.stdout

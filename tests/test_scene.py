@@ -6,15 +6,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import mlsgalerkin.fluid.effects as effects_mod
-import mlsgalerkin.simulation as simulation_mod
+import mlsgalerkin.fluid as fluid_mod
+import mlsgalerkin.fluid.solver as solver_mod
 from mlsgalerkin.fluid import (
     BulkViscosity,
     DensityFilter,
     Effect,
     FluidBody,
+    FreeSurfaceDetection,
     Gravity,
     MonaghanViscosity,
+    NewtonianViscosity,
     Phase,
     TaitPressure,
     WallBody,
@@ -108,7 +110,7 @@ def test_simulation_validates_before_any_work(monkeypatch):
         raise AssertionError("work was done before the scene was validated")
 
     for name in ("find_neighbors", "build_state", "evaluate_shape_functions"):
-        monkeypatch.setattr(simulation_mod, name, forbidden)
+        monkeypatch.setattr(solver_mod, name, forbidden)
     setups = []
 
     class Recorder(Effect):
@@ -132,9 +134,9 @@ STAGE_METHODS = ("kinematics", "pressure", "boundary", "stress", "force", "after
 @pytest.fixture
 def calls(monkeypatch):
     """Record ``(class name of the instance, method)`` for every stage call of every Effect
-    class in :mod:`mlsgalerkin.fluid.effects` (the base class included)."""
+    class exported by :mod:`mlsgalerkin.fluid` (the base class included)."""
     log: list[tuple[str, str]] = []
-    classes = [c for c in vars(effects_mod).values() if isinstance(c, type) and issubclass(c, Effect)]
+    classes = [c for c in vars(fluid_mod).values() if isinstance(c, type) and issubclass(c, Effect)]
     assert len(classes) >= 9  # Effect + the 8 shipped effects
     for cls in classes:
         for meth in STAGE_METHODS:
@@ -188,13 +190,13 @@ def test_time_report_has_one_entry_per_listed_effect():
     listed = [TaitPressure(20.0), Gravity(), Walls("free_slip"), MonaghanViscosity(0.1),
               DensityFilter(5)]
     res = Simulation(Scene([_water(), walls], listed, t_end=0.01)).run(progress=False)
-    report = res.summary["time_per_stage_s"]
+    report = res.summary["fluid"]["time_per_stage_s"]
     for e in listed:
         assert e.name in report and report[e.name] >= 0.0
-    unlisted = [BulkViscosity(), effects_mod.NewtonianViscosity(), effects_mod.FreeSurfaceDetection()]
+    unlisted = [BulkViscosity(), NewtonianViscosity(), FreeSurfaceDetection()]
     for e in unlisted:
         assert e.name not in report
     # solver stages are reported next to the effects, fractions sum to one
     for stage in ("neighbors", "shape_functions", "velocity_gradient", "internal_force", "integrate"):
         assert stage in report
-    assert sum(res.summary["time_per_stage_fraction"].values()) == pytest.approx(1.0, abs=1e-3)
+    assert sum(res.summary["fluid"]["time_per_stage_fraction"].values()) == pytest.approx(1.0, abs=1e-3)

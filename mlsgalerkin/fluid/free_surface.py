@@ -1,9 +1,9 @@
-r"""Free-surface particle detection (seed digest §7.12).
+r"""Free-surface particle detection: the :class:`FreeSurfaceDetection` effect and its kernels.
 
 Two detectors share one neighbour table (``find_neighbors(x, x, radius=R)`` with
 ``R >= 2 * radius_factor * spacing``; a larger radius is fine, further pairs are ignored).
 
-**Circle coverage** (2D; S0 §12.2.5.5, Koh et al. 2012) — :func:`detect_circle_coverage`.
+**Circle coverage** (2D; Koh et al. 2012, as described by Xing 2019) — :func:`detect_circle_coverage`.
 Every particle ``i`` gets a circle of radius :math:`r = 1.05\,r_0` (``r_0`` the initial
 spacing) discretised with 360 test points :math:`p_k = x_i + r(\cos\theta_k, \sin\theta_k)`.
 The particle is *interior* when every :math:`p_k` lies strictly inside the circle of radius
@@ -11,27 +11,10 @@ The particle is *interior* when every :math:`p_k` lies strictly inside the circl
 surface. Only neighbours with :math:`|x_j - x_i| < 2r` can cover anything. An isolated
 particle is on the surface.
 
-*Geometry on a lattice.* Neighbour ``j`` at distance ``d < 2r`` covers the arc of half-angle
-:math:`\arccos(d / 2r)` around its direction. On a square lattice the four axis neighbours
-(``d = r_0``) cover :math:`\pm 61.6°` each at ``r = 1.05 r_0``, so an interior circle is
-covered with a 16.6° overlap on every side (the diagonals add :math:`\pm 47.7°`); full
-coverage needs only :math:`r > r_0/\sqrt2 \approx 0.71\,r_0` (hexagonal lattice:
-:math:`r > r_0/\sqrt3`). On a flat surface the outward test point :math:`x_i + r\,\mathbf n`
-is at distance :math:`\sqrt{r_0^2 + r^2} > r` from the in-row neighbours for *any* ``r``, so
-the outermost row is always detected and the second row is covered by the particle above it:
-on a lattice block the method returns exactly the outer ring (tested). With
-``r = 1.05 r_0`` a single vacancy (particles ``2 r_0`` apart across it) is bridged by the
-diagonal neighbours and is *not* a surface, which is the intended noise tolerance; a cavity
-two or more particles wide is detected. The seed gives ``1.05 r_0`` for 3D only; it works
-unchanged in 2D, so no other radius is needed.
-
-*Recessed particles.* A surface particle set back by ``δ`` behind two neighbours at lateral
-offsets ``±a`` is covered, hence called interior, when :math:`a^2 + (r - δ)^2 < r^2`. On the
-zigzag side of a hexagonal lattice (``a = √3/2 r_0``, ``δ = r_0/2``) this holds for any
-``r > r_0``: at ``1.05 r_0`` the recessed half of the outer layer is interior (the circle
-test sees a surface *one particle thick only where it is flat or convex*); use
-``radius_factor <= 1`` (and ``> 1/√3``) if those particles must be flagged. The cheap screen
-flags them. Large disorder (±0.25 r_0) produces the same effect occasionally.
+On a lattice block the test returns exactly the outer ring; a single vacancy is bridged (not a
+surface), a cavity two particles wide is detected, and recessed particles of a zigzag surface
+are called interior (``docs/theory/galerkin_fluid.md`` §10 has the geometry and the measured
+comparison).
 
 **Cheap screen** (any dimension) — :func:`detect_neighbour_deficit`. With
 :math:`R_c = 2r` and the weight :math:`w_{ij} = (1 - r_{ij}/R_c)^2` for :math:`r_{ij} < R_c`,
@@ -48,7 +31,7 @@ invisible (``s = 0.003``). Particle ``i`` is on the surface when
 * ``N_i < sparse_fraction * N_0`` (default 0.5: isolated particles, filaments and thin sheets,
   whose neighbourhood is symmetric but empty), or
 * ``N_i < beta * N_0`` **and** ``s_i > asymmetry_threshold`` (defaults 0.96 and 0.22):
-  the seed's 3D candidate screen :math:`N_p < \beta N_0` followed by the asymmetry test in
+  Xing's (2019) 3D candidate screen :math:`N_p < \beta N_0` followed by the asymmetry test in
   place of the spherical-cap coverage.
 
 ``N_0`` is the count of a full neighbourhood: given (``n_reference``, e.g. 12 for a square
@@ -56,21 +39,7 @@ lattice at ``R_c = 2.1 r_0``) or the median of ``N_i`` over the particles with
 ``s_i <= asymmetry_threshold`` (the likely interior, so that a small block whose particles
 are mostly on the surface still gets the interior count).
 
-*Tuning (2D).* The count screen alone is not a detector: at ``R_c = 2.1 r_0`` the second row
-of a square lattice has ``N = 11 = 0.92 N_0`` and is a candidate for any β > 11/12; the screen
-only removes full neighbourhoods whose asymmetry comes from disorder (without it a ±0.25 r_0
-jittered block has about five times more false surfaces). β = 0.96 is kept from the seed;
-with ``N_0 = 12`` any β in (11/12, 1] gives the same candidates. The threshold 0.22 separates
-the interior of a jittered lattice (``s`` at most 0.10 at ±0.1 r_0; 99.9 % below about 0.23 at
-±0.2 r_0) from its surface (``s`` at least 0.36 at ±0.1 r_0, about 0.26 at ±0.2 r_0); 0.2 gives
-more false surfaces and 0.25 more missed ones at ±0.2–0.25 r_0 jitter.
-
-*Accuracy.* On the lattice block, ring disc, square cavity and ±0.1 r_0 jittered block both
-detectors are exact. At ±0.15–0.2 r_0 jitter the cheap screen misclassifies a few particles
-in ten thousand, at ±0.25 r_0 about 0.5 % on average (up to 3 % in one sample, when the
-discrete median ``N_0`` flips from 12 to 13); the circle test, which has no tuned threshold,
-produced no false surface in these tests and about ten times fewer errors overall (it
-misses about half as many surface particles).
+The thresholds were tuned on jittered lattices (``docs/theory/galerkin_fluid.md`` §10);
 ``verification/free_surface_comparison.py`` regenerates the comparison table.
 
 Both detectors are numba loops, parallel over particles, with numpy references
@@ -231,8 +200,8 @@ def detect_circle_coverage(
     neighbors : the table of the particles against themselves (``find_neighbors(x, x, R)``)
         with ``R >= 2 * radius_factor * spacing``; the pair ``(i, i)`` may be present.
     spacing : initial particle spacing ``r0``, m.
-    radius_factor : circle radius ``r = radius_factor * r0`` (seed: 1.05).
-    n_test_points : points on each circle, evenly spaced from angle 0 (seed: 360).
+    radius_factor : circle radius ``r = radius_factor * r0`` (Koh et al. 2012: 1.05).
+    n_test_points : points on each circle, evenly spaced from angle 0 (Koh et al. 2012: 360).
     """
     x, indptr, indices, radius = _check_inputs(positions, neighbors, spacing, radius_factor)
     if x.shape[1] != 2:

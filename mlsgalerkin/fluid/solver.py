@@ -420,6 +420,8 @@ class FluidSolver(Solver):
             arrays[f"extra__{k}"] = np.asarray(v).copy()
         if self._table_volumes is not None:  # RKPM: the volumes of the current table
             arrays["table_volumes"] = self._table_volumes.copy()
+        if self._external is not None:  # the last exchange's forces (the next midpoint evaluation uses them)
+            arrays["surface_forces"] = self._external.copy()
         meta = {
             "t": s.t, "step": s.step, "dt_next": s.dt_next, "n": s.n, "n_fluid": s.n_fluid,
             "effects": {e.name: e.state_dict() for e in self.effects},
@@ -444,6 +446,7 @@ class FluidSolver(Solver):
         for k, v in arrays.items():
             if k.startswith("extra__"):
                 s.extra[k[len("extra__"):]] = v.copy()
+        self._external = arrays["surface_forces"].copy() if "surface_forces" in arrays else None
         s.t, s.step, s.dt_next = float(meta["t"]), int(meta["step"]), float(meta["dt_next"])
         for e in self.effects:
             e.load_state_dict(meta["effects"].get(e.name, {}))
