@@ -2,7 +2,7 @@ r"""Nodal-integration Galerkin sums over a :class:`~mlsgalerkin.approximation.Sh
 
 The table is evaluated at the integration points ``k`` (the particles themselves for nodal
 integration) against the nodes ``i``; pair ``p`` couples point ``k = row(p)`` and node
-``i = indices[p]``. With point volumes ``V_k = M_k / ρ_k`` and masses ``M_k`` (seed digest §4):
+``i = indices[p]``. With point volumes ``V_k = M_k / ρ_k`` and masses ``M_k`` (Cueto-Felgueroso et al. 2005):
 
 =====================  ============================================================  ===========
 quantity               formula                                                        shape

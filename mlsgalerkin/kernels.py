@@ -19,7 +19,7 @@ The numpy formulas in :data:`_SHAPES` are the readable reference; :func:`kernel_
 numba scalar version used inside compiled loops, selected by ``Kernel.kernel_id``. A test checks
 that both agree for every kernel.
 
-Constants follow the corrected table of the seed digest (§5.3): Lucy's 3D constant carries the
+Constants follow Xing (2019) and Liu & Liu (2003), corrected where they are wrong: Lucy's 3D constant carries the
 factor :math:`\pi`; the super-Gaussian uses the dimension-general factor :math:`(d/2 + 1 - q^2)`;
 the quintic 3D constant is the exact :math:`1/(120\pi)`. Wendland kernels use the common SPH
 convention with support ``q < 2`` and the 1D functions :math:`\psi_{1,k}` in 1D.
@@ -344,7 +344,7 @@ KERNELS: dict[str, Kernel] = {
     ]
 }
 
-#: The nine kernels of the source chapter's accuracy study (seed digest §5.2 a–i).
+#: The nine kernels of the accuracy study of Xing (2019, §12.2.3).
 SPH_STUDY_KERNELS: tuple[str, ...] = (
     "quadratic",
     "lucy_quartic",

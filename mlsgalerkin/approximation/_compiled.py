@@ -5,7 +5,7 @@ All kernels fill per-pair arrays aligned with a CSR neighbour table (``indptr``,
 node ``j = indices[p]``, plus per-point ``order_out`` (order used; -1 if even the constant basis
 failed) and ``cond_out`` (1-norm condition number of the scaled moment matrix at that order).
 
-Formulas (seed digest §1.8, "frozen centre"): with weights ``w_j = f(r_j/h_j) / h_j^d [V_j]``,
+Formulas (exact derivatives with a "frozen centre" of the shifted basis): with weights ``w_j = f(r_j/h_j) / h_j^d [V_j]``,
 scaled basis ``P_j = P((x_j - x)/s)``, ``M = Σ_j w_j P_j P_jᵀ``, ``γ = M⁻¹ P(0)``:
 
     N_j = (γ·P_j) w_j

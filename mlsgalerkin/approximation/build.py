@@ -9,7 +9,7 @@ r"""Build MLS / RKPM / Shepard / orthogonal shape functions with exact gradients
 
 Methods
 -------
-``"mls"``         weights ``w_j = W(x - x_j, h_j)`` (classical MLS, seed digest §1.3)
+``"mls"``         weights ``w_j = W(x - x_j, h_j)`` (classical MLS, Lancaster & Šalkauskas 1981)
 ``"rkpm"``        weights ``w_j = W(x - x_j, h_j) V_j`` with nodal ``volumes`` (§1.4)
 ``"shepard"``     zeroth order, ``N_j = w_j / Σ w`` (§2.1); optional volumes
 ``"orthogonal"``  modified Gram–Schmidt basis in the weighted inner product (§3): diagonal

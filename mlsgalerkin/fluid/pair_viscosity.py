@@ -73,7 +73,7 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
-#: ``φ² = 0.01 h²`` regulariser of the denominator (seed: ``φ = 0.1 h``).
+#: ``φ² = 0.01 h²`` regulariser of the denominator (Monaghan 1992: ``η = 0.1 h``).
 ETA_SQUARED = 0.01
 
 

@@ -5,7 +5,7 @@ Both integrate at the nodes with weights ``w_L`` (nodal volumes) and return a
 are ``N_I(x_L)`` and whose ``gradients`` are what the rule uses for ``∇N_I`` at ``x_L``.
 
 DNI
-    ``∇N_I(x_L)`` evaluated directly (the sources' choice, seed digest §4.3). Cheap; fails the
+    ``∇N_I(x_L)`` evaluated directly (the choice of Cueto-Felgueroso et al. 2005). Cheap; fails the
     linear patch test on irregular nodes and admits spurious zero-energy modes.
 
 SCNI (Chen, Wu, Yoon & You 2001)

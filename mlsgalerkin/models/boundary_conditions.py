@@ -1,7 +1,7 @@
 r"""Weak essential conditions (Nitsche, penalty) and natural loads on a boundary quadrature.
 
 MLS/RKPM shape functions are not interpolating (``N_J(x_I) ≠ δ_IJ``), so prescribed values can
-not be set on DOFs as in finite elements (seed digest §4.2). They are imposed weakly on the
+not be set on DOFs as in finite elements. They are imposed weakly on the
 boundary Gauss points of :func:`~mlsgalerkin.integration.boundary_basis` instead.
 
 Nitsche's method (symmetric; Nitsche 1971)
