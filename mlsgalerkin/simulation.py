@@ -20,7 +20,6 @@ The loop knows no physics: see ``docs/architecture.md``.
 from __future__ import annotations
 
 import logging
-import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
