@@ -64,6 +64,7 @@ __all__ = [
     "measure",
     "spectrum",
     "RULES",
+    "RULE_LABELS",
     "BASES",
     "BCS",
     "NITSCHE_BETA",
@@ -74,6 +75,9 @@ __all__ = [
 logger = logging.getLogger(__name__)
 
 RULES = ("dni", "scni", "vci")
+#: How the rules are named in tables and figures.
+RULE_LABELS = {"dni": "DNI", "scni": "SCNI", "vci": "VCI",
+               "vci_constant": "VCI (constant profile)"}
 #: Extra rule names a spec accepts: VCI with the constant correction profile (ablation).
 EXTRA_RULES = ("vci_constant",)
 BASES = ("linear", "quadratic")
