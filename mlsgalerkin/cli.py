@@ -32,6 +32,8 @@ def _cmd_kernels(args: argparse.Namespace) -> int:
 def _run_study(run, args: argparse.Namespace) -> int:
     from mlsgalerkin.studies.engine import GridError, MeasurementError, SchedulerError
 
+    if not args.verbose:  # Dask logs every cluster start and stop at INFO
+        logging.getLogger("distributed").setLevel(logging.WARNING)
     try:
         result = run(out=args.out, quick=args.quick, scheduler=args.scheduler,
                      progress=not args.no_progress)

@@ -38,7 +38,7 @@ TIMING = ("wall_time_s", "worker", "wall_s")
 def client():
     distributed = pytest.importorskip("distributed")
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                       dashboard_address=None, env=dict(SINGLE_THREAD_ENV))
+                                       dashboard_address=":0", env=dict(SINGLE_THREAD_ENV))
     with distributed.Client(cluster) as c:
         yield c
     cluster.close()

@@ -44,6 +44,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
+    if not args.verbose:  # Dask logs every cluster start and stop at INFO
+        logging.getLogger("distributed").setLevel(logging.WARNING)
     result = run_galerkin_study(out=args.out, quick=args.quick, scheduler=args.scheduler,
                                 progress=not args.no_progress)
     plots = write_report(result)

@@ -44,6 +44,8 @@ def main(argv: list[str] | None = None) -> int:
         level=logging.INFO if args.verbose else logging.WARNING,
         format="%(levelname)s %(name)s: %(message)s",
     )
+    if not args.verbose:  # Dask logs every cluster start and stop at INFO
+        logging.getLogger("distributed").setLevel(logging.WARNING)
     result = run_kernel_study(out=args.out, quick=args.quick, scheduler=args.scheduler,
                               progress=not args.no_progress)
     plots = write_report(result)

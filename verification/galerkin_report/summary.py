@@ -212,8 +212,9 @@ def summary_markdown(rows: list[dict], orders: list[dict], cfg, prov: dict,
              f"mlsgalerkin {prov['mlsgalerkin_version']}, "
              f"commit `{prov['git_commit']}`, {prov['date_utc']}; {prov['machine']['platform']}, "
              f"{prov['machine']['cpu_count']} CPUs; {prov.get('scheduler', 'serial')}, numba "
-             f"threads {prov.get('numba_threads')} per worker; total wall time "
-             f"{prov.get('wall_s', math.nan):.0f} s. "
+             f"threads {prov.get('numba_threads')} per worker; environment "
+             + (", ".join(f"{k}={v}" for k, v in prov.get("environment", {}).items()) or "—")
+             + f"; total wall time {prov.get('wall_s', math.nan):.0f} s. "
              f"See `{files.get('provenance')}`.\n")
     L.append("## Set-up\n")
     L.append("* **Problems** (`mlsgalerkin/studies/galerkin/problems.py`): linear patch tests "

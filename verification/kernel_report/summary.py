@@ -33,6 +33,8 @@ def summary_text(res: dict, cfg: StudyConfig, prov: dict, files: dict[str, str])
                 ["python / numpy / numba", f"{prov['python']} / {prov['numpy']} / {prov['numba']}"],
                 ["scheduler", f"{prov.get('scheduler', '—')}; numba threads per worker "
                               f"{prov.get('numba_threads', '—')}"],
+                ["environment", ", ".join(f"{k}={v}" for k, v in
+                                          prov.get("environment", {}).items()) or "—"],
                 ["wall time", f"{prov.get('wall_s', math.nan):.1f} s"],
             ],
         )

@@ -31,7 +31,13 @@ from __future__ import annotations
 from mlsgalerkin.studies.engine.grid import RESERVED_COLUMNS, Grid, GridError, as_grid
 from mlsgalerkin.studies.engine.result import FIT_COLUMNS, StudyResult, select, write_records
 from mlsgalerkin.studies.engine.runner import MeasurementError, run_study, worker_name
-from mlsgalerkin.studies.engine.schedulers import LOCAL, SERIAL, SchedulerError, available_cores
+from mlsgalerkin.studies.engine.schedulers import (
+    LOCAL,
+    SERIAL,
+    SchedulerError,
+    available_cores,
+    numeric_environment,
+)
 from mlsgalerkin.studies.engine.timing import TimingPolicy, best_time
 
 __all__ = [
@@ -48,6 +54,7 @@ __all__ = [
     "as_grid",
     "available_cores",
     "best_time",
+    "numeric_environment",
     "run_study",
     "select",
     "worker_name",

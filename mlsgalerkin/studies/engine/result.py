@@ -28,6 +28,7 @@ from mlsgalerkin.studies.figures import PLOT_FLOOR, save_png, tidy_log_axes
 
 __all__ = ["FIT_COLUMNS", "StudyResult", "select", "write_records"]
 
+_MARKERS = "os^vD<>ph*"
 #: Columns of a fit record after the ``by`` columns (see :meth:`StudyResult.fit`).
 FIT_COLUMNS = ("x", "y", "exponent", "coefficient", "r2", "n_points", "x_min", "x_max")
 
@@ -149,9 +150,10 @@ class StudyResult:
             raise ValueError(f"no record matches where={dict(where or {})}; nothing to plot")
         from matplotlib.figure import Figure
 
-        fig = Figure(figsize=(6.4, 4.6))
+        many = len(groups) > 6  # legend beside the axes, not over the lines
+        fig = Figure(figsize=(9.6 if many else 6.4, 4.6))
         ax = fig.subplots()
-        for key, rs in groups.items():
+        for i, (key, rs) in enumerate(groups.items()):
             pts = [(float(r[time]), float(r[error])) for r in rs
                    if r[time] is not None and r[error] is not None
                    and math.isfinite(float(r[time])) and float(r[time]) > 0
@@ -160,14 +162,19 @@ class StudyResult:
                 continue
             t, e = np.array(pts).T
             label = ", ".join(f"{b}={v}" for b, v in zip(by, key)) or error
-            ax.loglog(t, np.maximum(e, PLOT_FLOOR), marker="o", ms=4, lw=1.2, label=label)
+            ax.loglog(t, np.maximum(e, PLOT_FLOOR), color=f"C{i % 10}",
+                      ls=("-", "--", ":")[i // 10 % 3], marker=_MARKERS[i % len(_MARKERS)],
+                      ms=4, lw=1.2, label=label)
         ax.set_xlabel(time_label or f"wall time per measurement, {time} [s]")
         ax.set_ylabel(error_label or f"{error} [-]")
         ax.set_title(title or "Work-precision: error against wall time (lower-left is better)",
                      fontsize=9)
         ax.grid(True, which="both", alpha=0.25)
         if len(groups) > 1 or by:
-            ax.legend(fontsize=7, frameon=False)
+            if many:
+                ax.legend(fontsize=7, frameon=False, loc="upper left", bbox_to_anchor=(1.02, 1.0))
+            else:
+                ax.legend(fontsize=7, frameon=False)
         tidy_log_axes(ax)
         fig.tight_layout()
         return save_png(fig, path)

@@ -8,7 +8,8 @@
     *processes* (one per core available to this process, or ``n_workers``), one thread each,
     with ``NUMBA_NUM_THREADS``, ``OMP_NUM_THREADS``, ``OPENBLAS_NUM_THREADS`` and
     ``MKL_NUM_THREADS`` set to 1, so that each measurement runs on one core and its wall time
-    does not depend on the other workers' threads. The dashboard is off.
+    does not depend on the other workers' threads. The scheduler's HTTP server (dashboard)
+    listens on a free port, so studies of several users on one machine do not collide.
 ``"serial"``
     Every point in this process, one after the other (no Dask). Handy for debugging a
     measurement and for tiny grids, where starting worker processes costs more than the work.
@@ -40,6 +41,7 @@ __all__ = [
     "SchedulerError",
     "SerialBackend",
     "available_cores",
+    "numeric_environment",
     "open_backend",
 ]
 
@@ -54,6 +56,9 @@ SINGLE_THREAD_ENV = {
     "OPENBLAS_NUM_THREADS": "1",
     "MKL_NUM_THREADS": "1",
 }
+#: Environment variables that change threads or the BLAS kernel (and with it the last bits of
+#: BLAS results): recorded in the studies' provenance.
+NUMERIC_ENV_VARS = (*SINGLE_THREAD_ENV, "OPENBLAS_CORETYPE", "NPY_DISABLE_CPU_FEATURES")
 #: Seconds to wait for an existing scheduler to answer.
 CONNECT_TIMEOUT_S = 20
 
@@ -110,6 +115,12 @@ class DaskBackend:
                 self.client.cancel(pending)
 
 
+def numeric_environment() -> dict[str, str]:
+    """The :data:`NUMERIC_ENV_VARS` set in this process (local-cluster workers inherit them, with
+    the thread counts of :data:`SINGLE_THREAD_ENV`)."""
+    return {k: os.environ[k] for k in NUMERIC_ENV_VARS if k in os.environ}
+
+
 def available_cores() -> int:
     """Cores this process may run on (the CPU affinity where the OS reports it)."""
     try:
@@ -160,10 +171,11 @@ def open_backend(scheduler: Any = None, n_workers: int | None = None) -> Iterato
     if scheduler in (None, LOCAL):
         n = n_workers or available_cores()
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               dashboard_address=None, env=dict(SINGLE_THREAD_ENV))
+                               dashboard_address=":0", env=dict(SINGLE_THREAD_ENV))
         try:
             with Client(cluster) as client:
-                logger.info("local Dask cluster with %d workers started", n)
+                logger.info("local Dask cluster with %d workers started (dashboard %s)", n,
+                            client.dashboard_link)
                 yield DaskBackend(client, f"local Dask cluster ({n} worker processes, 1 thread "
                                           "each)")
         finally:

@@ -12,7 +12,7 @@ from typing import Any
 
 from mlsgalerkin.io.files import write_json
 from mlsgalerkin.io.provenance import provenance
-from mlsgalerkin.studies.engine import Grid, run_study, write_records
+from mlsgalerkin.studies.engine import Grid, numeric_environment, run_study, write_records
 from mlsgalerkin.studies.galerkin.result import GalerkinStudyResult
 from mlsgalerkin.studies.galerkin.sweeps import (
     fit_orders,
@@ -100,6 +100,7 @@ def run_galerkin_study(out: str | Path, quick: bool = False, *, scheduler: Any =
         "numba_threads": cfg.threads,
         "scheduler": study.scheduler,
         "workers": study.workers,
+        "environment": numeric_environment(),
         "n_solves": len(rows),
         "seed": cfg.seed,
         "call": {"out": str(out), "quick": quick, "progress": progress},

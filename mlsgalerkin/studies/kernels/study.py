@@ -12,7 +12,7 @@ from typing import Any
 
 from mlsgalerkin.io.files import write_csv_rows, write_json
 from mlsgalerkin.io.provenance import provenance
-from mlsgalerkin.studies.engine import Grid, run_study
+from mlsgalerkin.studies.engine import Grid, numeric_environment, run_study
 from mlsgalerkin.studies.kernels.config import COLUMNS, FIT_COLUMNS, StudyConfig, make_config
 from mlsgalerkin.studies.kernels.fits import compute_fits
 from mlsgalerkin.studies.kernels.headline import headline
@@ -108,6 +108,7 @@ def run_kernel_study(
         "numba_threads": cfg.threads,
         "scheduler": study.scheduler,
         "workers": study.workers,
+        "environment": numeric_environment(),
         "measure_s": round(study.wall_time_s, 2),
         "wall_s": round(wall, 2),
         "n_rows": len(rows),
