@@ -33,6 +33,8 @@ def _run_study(run, args: argparse.Namespace) -> int:
     from mlsgalerkin.studies.engine import GridError, MeasurementError, SchedulerError
 
     if not args.verbose:  # Dask logs every cluster start and stop at INFO
+        import distributed  # noqa: F401  (importing it sets its loggers' levels)
+
         logging.getLogger("distributed").setLevel(logging.WARNING)
     try:
         result = run(out=args.out, quick=args.quick, scheduler=args.scheduler,

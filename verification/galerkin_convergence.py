@@ -45,6 +45,8 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     if not args.verbose:  # Dask logs every cluster start and stop at INFO
+        import distributed  # noqa: F401  (importing it sets its loggers' levels)
+
         logging.getLogger("distributed").setLevel(logging.WARNING)
     result = run_galerkin_study(out=args.out, quick=args.quick, scheduler=args.scheduler,
                                 progress=not args.no_progress)

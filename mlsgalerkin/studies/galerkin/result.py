@@ -7,9 +7,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from mlsgalerkin.studies.engine.result import StudyResult
 from mlsgalerkin.studies.galerkin.runner import RULE_LABELS
-from mlsgalerkin.studies.galerkin.sweeps import GalerkinConfig, energy_quantity
+from mlsgalerkin.studies.galerkin.sweeps import energy_quantity
+from mlsgalerkin.studies.run import StudyRun
 
 __all__ = ["GalerkinStudyResult", "largest_patch_errors"]
 
@@ -27,38 +27,18 @@ def largest_patch_errors(rows: list[dict[str, Any]], bc: str = "nitsche"
 
 
 @dataclass
-class GalerkinStudyResult:
-    """Paths, rows (the engine's records) and observed orders of one run.
+class GalerkinStudyResult(StudyRun):
+    """A Galerkin-study run (:class:`~mlsgalerkin.studies.run.StudyRun`) with its observed
+    orders."""
 
-    ``provenance`` is the dict written to ``provenance.json``; ``study`` the engine's result
-    (scheduler, workers, timing policy).
-    """
-
-    out: Path
-    config: GalerkinConfig = field(repr=False)
-    csv_path: Path
-    orders_path: Path
-    provenance_path: Path
-    plots: list[Path]
-    rows: list[dict[str, Any]] = field(repr=False)
-    orders: list[dict[str, Any]] = field(repr=False)
-    provenance: dict[str, Any] = field(repr=False)
-    study: StudyResult = field(repr=False)
-    wall_s: float = math.nan
-
-    @property
-    def quick(self) -> bool:
-        """Whether this was the quick configuration."""
-        return self.config.quick
+    orders_path: Path = field(kw_only=True)
+    orders: list[dict[str, Any]] = field(kw_only=True, repr=False)
 
     def report(self) -> str:
         """Text for the terminal: files, where it ran, patch tests and observed orders."""
         lines = [f"Galerkin study ({'quick' if self.quick else 'default'}) written to {self.out} "
                  f"in {self.wall_s:.1f} s on {self.study.scheduler}",
-                 f"  table     : {self.csv_path} ({len(self.rows)} rows)",
-                 f"  orders    : {self.orders_path}",
-                 f"  provenance: {self.provenance_path} (commit {self.provenance['git_commit']})",
-                 "  plots     : " + ", ".join(p.name for p in self.plots), "",
+                 *self.files_lines({"orders": self.orders_path}), "",
                  "patch tests, largest relative L2 error (Nitsche):"]
         for rule, worst in largest_patch_errors(self.rows).items():
             lines.append(f"  {RULE_LABELS.get(rule, rule):<5} regular {worst['regular']:.1e}   "

@@ -7,37 +7,21 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from mlsgalerkin.studies.engine.result import StudyResult
-from mlsgalerkin.studies.kernels.config import SMOOTH_FUNCTIONS, StudyConfig
+from mlsgalerkin.studies.kernels.config import SMOOTH_FUNCTIONS
+from mlsgalerkin.studies.run import StudyRun
 
 __all__ = ["KernelStudyResult"]
 
 
 @dataclass
-class KernelStudyResult:
-    """Paths, rows, fits and key numbers (:mod:`~.headline`) of one run.
+class KernelStudyResult(StudyRun):
+    """A kernel-study run (:class:`~mlsgalerkin.studies.run.StudyRun`) with its fits and key
+    numbers (:mod:`~.headline`). ``rows`` carry the CSV columns plus the grid parameters,
+    ``rank_note`` and ``wall_time_s``."""
 
-    ``rows`` are the engine's records (CSV columns plus the grid parameters, ``rank_note`` and
-    ``wall_time_s``); ``provenance`` is the dict written to ``provenance.json``.
-    """
-
-    out: Path
-    config: StudyConfig = field(repr=False)
-    csv_path: Path
-    fits_path: Path
-    provenance_path: Path
-    plots: list[Path]
-    rows: list[dict[str, Any]] = field(repr=False)
-    fits: list[dict[str, Any]] = field(repr=False)
-    headline: dict[str, Any] = field(repr=False)
-    provenance: dict[str, Any] = field(repr=False)
-    study: StudyResult = field(repr=False)
-    wall_s: float = math.nan
-
-    @property
-    def quick(self) -> bool:
-        """Whether this was the quick configuration."""
-        return self.config.quick
+    fits_path: Path = field(kw_only=True)
+    fits: list[dict[str, Any]] = field(kw_only=True, repr=False)
+    headline: dict[str, Any] = field(kw_only=True, repr=False)
 
     @property
     def notes(self) -> list[str]:
@@ -50,10 +34,7 @@ class KernelStudyResult:
         lines = [
             f"kernel study ({'quick' if self.quick else 'full'}) written to {self.out} "
             f"in {self.wall_s:.1f} s on {self.study.scheduler}",
-            f"  table     : {self.csv_path} ({len(self.rows)} rows)",
-            f"  fits      : {self.fits_path}",
-            f"  provenance: {self.provenance_path} (commit {self.provenance['git_commit']})",
-            "  plots     : " + ", ".join(p.name for p in self.plots),
+            *self.files_lines({"fits": self.fits_path}),
             "",
             "fitted slope beta (error ~ h^beta), integral approximation, "
             f"N_nb = {self.config.int_nnb_fixed}, interior:",
