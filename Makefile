@@ -20,7 +20,7 @@ test: $(STAMP)
 
 verify: $(STAMP)
 	$(PY) -m pytest -q -m slow || test $$? -eq 5  # 5: no test is marked slow yet
-	$(PY) -m mlsgalerkin.cli study kernels --out verification/results/kernel_study
+	$(PY) verification/kernel_study.py --out verification/results/kernel_study
 	OPENBLAS_NUM_THREADS=1 $(PY) verification/galerkin_convergence.py --out verification/results/galerkin_convergence
 	$(PY) verification/fluid_validation.py --out verification/results/fluid_validation
 

@@ -30,20 +30,35 @@ def _cmd_kernels(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_study(run, args: argparse.Namespace) -> int:
+    from mlsgalerkin.studies.engine import GridError, MeasurementError, SchedulerError
+
+    if not args.verbose:  # Dask logs every cluster start and stop at INFO
+        import distributed  # noqa: F401  (importing it sets its loggers' levels)
+
+        logging.getLogger("distributed").setLevel(logging.WARNING)
+    try:
+        result = run(out=args.out, quick=args.quick, scheduler=args.scheduler,
+                     progress=not args.no_progress)
+    except (SchedulerError, GridError, MeasurementError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    print(result.report())
+    print("full report (summary.md, all figures): python verification/"
+          f"{args.report_script} --out DIR (in a clone of the repository)")
+    return 0
+
+
 def _cmd_study_kernels(args: argparse.Namespace) -> int:
     from mlsgalerkin.studies.kernels import run_kernel_study
 
-    result = run_kernel_study(out=args.out, quick=args.quick, progress=not args.no_progress)
-    print(result.report())
-    return 0
+    return _run_study(run_kernel_study, args)
 
 
 def _cmd_study_galerkin(args: argparse.Namespace) -> int:
-    from mlsgalerkin.studies.galerkin_convergence import run_galerkin_study
+    from mlsgalerkin.studies.galerkin import run_galerkin_study
 
-    result = run_galerkin_study(out=args.out, quick=args.quick, progress=not args.no_progress)
-    print(result.report())
-    return 0
+    return _run_study(run_galerkin_study, args)
 
 
 def _parse_sets(items: list[str]) -> dict[str, str]:
@@ -144,22 +159,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.set_defaults(func=_cmd_run)
 
-    study = sub.add_parser("study", help="run a verification study")
+    study = sub.add_parser("study", help="run a shipped study on the study engine (Dask)")
     studies = study.add_subparsers(dest="study", required=True)
-    p = studies.add_parser(
-        "kernels", help="kernel x smoothing-length accuracy study (errors, wall times, plots)"
-    )
-    p.add_argument("--quick", action="store_true", help="small sweep (< 30 s)")
-    p.add_argument("--out", default="results/kernel_study", help="output directory")
-    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
-    p.set_defaults(func=_cmd_study_kernels)
-    p = studies.add_parser(
-        "galerkin", help="Galerkin convergence study: patch tests, rates, h-sweep, work-precision"
-    )
-    p.add_argument("--quick", action="store_true", help="three-level subset (< 60 s)")
-    p.add_argument("--out", default="results/galerkin_convergence", help="output directory")
-    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
-    p.set_defaults(func=_cmd_study_galerkin)
+    for name, help_text, quick_help, func, script in (
+        ("kernels", "kernel x smoothing-length accuracy study (errors, wall times, fits)",
+         "small sweep (< 30 s)", _cmd_study_kernels, "kernel_study.py"),
+        ("galerkin", "Galerkin convergence study: patch tests, orders, h-sweep, work-precision",
+         "three-level subset (< 60 s)", _cmd_study_galerkin, "galerkin_convergence.py"),
+    ):
+        p = studies.add_parser(name, help=help_text)
+        p.add_argument("--quick", action="store_true", help=quick_help)
+        p.add_argument("--out", default=f"results/{script.removesuffix('.py')}",
+                       help="output directory (default: %(default)s)")
+        p.add_argument("--scheduler", metavar="ADDRESS",
+                       help="Dask scheduler to fan out to (tcp://host:port), or 'serial' "
+                            "(default: a local cluster, one worker per core)")
+        p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+        p.set_defaults(func=func, report_script=script)
     return parser
 
 

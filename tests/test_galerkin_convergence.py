@@ -1,7 +1,9 @@
 """Galerkin convergence study: the quick run's claims, its files, and its building blocks.
 
-The quick study (three levels, cubic spline; about 20-40 s with a warm numba cache) runs once
-per module into a temporary directory. Measured on the reference machine (relative errors):
+The quick study (three levels, cubic spline; about 15-40 s with a warm numba cache) runs once
+per module into a temporary directory, serially (the Dask path is tested in
+``test_study_engine.py``); its report (``verification/galerkin_report``, imported from the
+repository root) is written next to it. Measured on the reference machine (relative errors):
 SCNI + Nitsche patch tests 5e-14 – 5e-13 (L2), DNI on perturbed nodes 1.3e-2 (elasticity) and
 3.1e-2 (Poisson); Poisson MMS with SCNI and a linear basis: L2 order 2.21, H1 order 1.26.
 """
@@ -16,8 +18,11 @@ import pytest
 from scipy.sparse.linalg import spsolve
 
 from mlsgalerkin.analysis import ErrorNorms, rectangle_quadrature
+from mlsgalerkin.analysis.convergence import observed_order
 from mlsgalerkin.integration import boundary_basis, meshfree_basis
+from mlsgalerkin.integration.vci import integration_constraint_residual, vci_test_basis
 from mlsgalerkin.models import elasticity, nitsche, poisson
+from mlsgalerkin.studies.galerkin import COLUMNS, run_galerkin_study
 from mlsgalerkin.studies.galerkin.problems import (
     PROBLEMS,
     elastic_patch,
@@ -26,11 +31,9 @@ from mlsgalerkin.studies.galerkin.problems import (
     poisson_mms,
     timoshenko,
 )
-from mlsgalerkin.studies.galerkin.report import time_to_error
 from mlsgalerkin.studies.galerkin.runner import SolveSpec, measure, spectrum
-from mlsgalerkin.studies.galerkin.sweeps import observed_order
-from mlsgalerkin.integration.vci import integration_constraint_residual, vci_test_basis
-from mlsgalerkin.studies.galerkin_convergence import COLUMNS, run_galerkin_study
+from verification.galerkin_report import write_report
+from verification.galerkin_report.summary import time_to_error
 
 REQUIRED = ["problem", "rule", "basis", "kernel", "support_ratio", "spacing", "n_nodes",
             "error_l2", "error_h1", "wall_s", "wall_shape_s", "wall_assembly_s", "wall_solve_s",
@@ -47,7 +50,8 @@ NUMERIC = ["support_ratio", "spacing", "n_nodes", "error_l2", "error_h1", "error
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp("galerkin_quick")
-    result = run_galerkin_study(out=out, quick=True, progress=False)
+    result = run_galerkin_study(out=out, quick=True, scheduler="serial", progress=False)
+    write_report(result)
     with open(result.csv_path, newline="") as fh:
         rows = list(csv.DictReader(fh))
     return result, rows
@@ -67,7 +71,7 @@ def test_files_exist(quick):
         assert name in names
         assert (result.out / name).stat().st_size > 0
     assert not [n for n in names if n.endswith(".tmp")]  # atomic writes leave nothing behind
-    summary = result.summary_path.read_text()
+    summary = (result.out / "summary.md").read_text()
     for heading in ("## Patch tests", "observed orders", "What accuracy costs",
                     "spurious zero-energy modes", "## Observations"):
         assert heading in summary
@@ -86,6 +90,7 @@ def test_csv_columns_present_and_finite(quick):
             float(r["wall_shape_s"]) + float(r["wall_assembly_s"]) + float(r["wall_solve_s"]),
             rel=1e-4, abs=1e-5)
         assert r["nodes"] in ("regular", "perturbed") and r["bc"] in ("nitsche", "penalty")
+        assert r["worker"].startswith("serial@")  # who measured the wall times
     assert {r["study"] for r in rows} == {"patch", "convergence", "h_sweep"}
 
 

@@ -1,4 +1,10 @@
-"""Kernel accuracy study: its helpers, and the seed's pass criteria (digest §9.9) in quick mode."""
+"""Kernel accuracy study: its helpers, and the seed's pass criteria (digest §9.9) in quick mode.
+
+The measurements are the package's (:mod:`mlsgalerkin.studies.kernels`); the report (claims,
+``summary.md``, figures) is ``verification/kernel_report``, imported from the repository root.
+The quick study runs once per module, serially (the Dask path is tested in
+``test_study_engine.py``), then its report is written.
+"""
 
 from __future__ import annotations
 
@@ -9,9 +15,12 @@ import math
 import numpy as np
 import pytest
 
+from mlsgalerkin.analysis.convergence import fit_power_law
+from mlsgalerkin.cli import main as cli_main
 from mlsgalerkin.kernels import SPH_STUDY_KERNELS, get_kernel
 from mlsgalerkin.neighbors import brute_force_neighbors
 from mlsgalerkin.studies import kernels as ks
+from verification.kernel_report import kernel_diagnostics, write_report
 
 # ----------------------------------------------------------------------------------------
 # small helpers
@@ -21,7 +30,7 @@ from mlsgalerkin.studies import kernels as ks
 def test_fit_power_law_recovers_a_known_slope(rng):
     h = np.geomspace(0.01, 0.3, 9)
     err = 0.7 * h**2.0 * (1.0 + 0.01 * rng.standard_normal(h.size))
-    fit = ks.fit_power_law(h, err)
+    fit = fit_power_law(h, err)
     assert fit.exponent == pytest.approx(2.0, abs=0.02)
     assert fit.coefficient == pytest.approx(0.7, rel=0.05)
     assert fit.n_points == 9 and fit.r2 > 0.999
@@ -30,10 +39,10 @@ def test_fit_power_law_recovers_a_known_slope(rng):
 def test_fit_power_law_skips_round_off_and_reports_no_fit():
     n = np.array([10.0, 20.0, 40.0, 80.0, 160.0])
     err = np.array([1e-2, 2.5e-3, 6.25e-4, 1e-16, 0.0])  # last two at round-off
-    fit = ks.fit_power_law(n, err)
+    fit = fit_power_law(n, err)
     assert fit.n_points == 3
     assert fit.exponent == pytest.approx(-2.0, abs=1e-9)
-    none = ks.fit_power_law(n, np.full(5, 1e-15))
+    none = fit_power_law(n, np.full(5, 1e-15))
     assert math.isnan(none.exponent) and not none.ok
 
 
@@ -86,7 +95,7 @@ def test_particle_sum_reproduces_linear_on_a_uniform_lattice(kernel):
 
 def test_super_gaussian_unity_defect_matches_the_closed_form():
     # ∫_{-2}^{2} (3/2 - q²) e^{-q²} dq / √π = erf(2) + 2 e^{-4} / √π
-    d = ks.kernel_diagnostics("super_gaussian")
+    d = kernel_diagnostics("super_gaussian")
     assert d["unity"] == pytest.approx(
         math.erf(2.0) + 2.0 * math.exp(-4.0) / math.sqrt(math.pi), rel=1e-10
     )
@@ -100,7 +109,8 @@ def test_super_gaussian_unity_defect_matches_the_closed_form():
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp("kernel_study")
-    result = ks.run_kernel_study(out, quick=True, progress=False)
+    result = ks.run_kernel_study(out, quick=True, scheduler="serial", progress=False)
+    write_report(result)
     with open(result.csv_path, newline="") as fh:
         rows = list(csv.DictReader(fh))
     with open(result.fits_path, newline="") as fh:
@@ -131,6 +141,7 @@ def test_files_exist_and_csv_has_the_columns(quick):
         assert (out / name).is_file() and (out / name).stat().st_size > 0, name
     assert not list(out.glob(".*.tmp")), "atomic writes left temporary files"
     assert list(rows[0].keys()) == ks.COLUMNS
+    assert all(r["worker"].startswith("serial@") for r in rows)  # who measured the wall time
     assert {r["part"] for r in rows} >= {"sph"}
     assert {r["region"] for r in rows} == {"interior", "all"}
     for r in rows:
@@ -152,12 +163,29 @@ def test_provenance_and_report(quick):
     ):
         assert prov[key], key
     assert prov["mode"] == "quick" and prov["n_rows"] == len(rows)
-    summary = result.summary_path.read_text()
+    assert prov["scheduler"] == result.study.scheduler and prov["workers"]
+    summary = (result.out / "summary.md").read_text()
     assert "## Provenance" in summary and prov["git_commit"] in summary
     for claim in ("**(a)", "**(b)", "**(c)", "**(d)"):
         assert claim in summary
     text = result.report()
     assert str(result.csv_path) in text and "cubic_spline" in text
+
+
+def test_cli_writes_the_tables_plot_and_key_numbers(tmp_path, capsys, quick):
+    out = tmp_path / "cli"
+    assert cli_main(["study", "kernels", "--quick", "--scheduler", "serial", "--no-progress",
+                     "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "kernels above 5%: johnson_quadratic" in printed
+    assert "verification/kernel_study.py" in printed  # where the full report comes from
+    names = {p.name for p in out.iterdir()}
+    assert names == {"kernel_study.csv", "kernel_study_fits.csv", "work_precision.png",
+                     "provenance.json"}
+    # the same numbers as the module's run (the CLI run is another process-level repetition)
+    result = quick[0]
+    fresh = (out / "kernel_study_fits.csv").read_text()
+    assert fresh == result.fits_path.read_text()
 
 
 @pytest.mark.parametrize("kernel", ["cubic_spline", "quartic_spline"])
@@ -174,7 +202,7 @@ def test_integral_approximation_is_second_order_in_h(quick, kernel, function):
         sweep="h",
         region="interior",
     )
-    fit = ks.fit_power_law([_num(r["h"]) for r in series], [_num(r["error_abs"]) for r in series])
+    fit = fit_power_law([_num(r["h"]) for r in series], [_num(r["error_abs"]) for r in series])
     assert fit.n_points >= 5
     assert 1.6 <= fit.exponent <= 2.4
     recorded = _sel(

@@ -1,10 +1,13 @@
 """Galerkin convergence study: patch tests, orders, smoothing-length sweep, work-precision.
 
-Thin wrapper around :func:`mlsgalerkin.studies.galerkin_convergence.run_galerkin_study`; the
-same study runs as ``mlsgalerkin study galerkin``. See ``verification/README.md``.
+The solves run on the study engine (:func:`mlsgalerkin.studies.galerkin.run_galerkin_study`, a
+local Dask cluster by default); this script adds the report (``summary.md`` with the measured
+observations, the figures) from :mod:`verification.galerkin_report`. ``mlsgalerkin study
+galerkin`` runs the same solves without the report. See ``verification/README.md``.
 
     python verification/galerkin_convergence.py --out verification/results/galerkin_convergence
     python verification/galerkin_convergence.py --quick --out results/demo
+    python verification/galerkin_convergence.py --scheduler tcp://10.0.0.5:8786
 """
 
 from __future__ import annotations
@@ -13,13 +16,18 @@ import argparse
 import logging
 import os
 import sys
+from pathlib import Path
 
 # Single-threaded BLAS, like the study's numba kernels: the dense eigenvalue problems of the
-# h-sweep otherwise fight for the cores of a shared 2-core machine (several times slower).
-# Must be set before numpy is imported.
+# h-sweep otherwise fight for the cores of a shared machine (several times slower). Must be set
+# before numpy is imported; local-cluster workers get it from the study engine.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from mlsgalerkin.studies.galerkin_convergence import run_galerkin_study  # noqa: E402
+if __package__ in (None, ""):  # run as a script: make the repository root importable
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from mlsgalerkin.studies.galerkin import run_galerkin_study  # noqa: E402
+from verification.galerkin_report import write_report  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -28,13 +36,24 @@ def main(argv: list[str] | None = None) -> int:
                         help="three-level subset, one kernel (< 60 s)")
     parser.add_argument("--out", default="verification/results/galerkin_convergence",
                         help="output directory (default: %(default)s)")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="Dask scheduler address to fan out to, or 'serial' "
+                             "(default: a local cluster)")
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     parser.add_argument("-v", "--verbose", action="store_true", help="log the stages")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
-    result = run_galerkin_study(out=args.out, quick=args.quick, progress=not args.no_progress)
+    if not args.verbose:  # Dask logs every cluster start and stop at INFO
+        import distributed  # noqa: F401  (importing it sets its loggers' levels)
+
+        logging.getLogger("distributed").setLevel(logging.WARNING)
+    result = run_galerkin_study(out=args.out, quick=args.quick, scheduler=args.scheduler,
+                                progress=not args.no_progress)
+    plots = write_report(result)
     print(result.report())
+    print(f"report    : {result.out / 'summary.md'}; figures: "
+          + ", ".join(p.name for p in plots))
     return 0
 
 

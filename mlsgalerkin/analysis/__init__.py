@@ -2,8 +2,10 @@
 
 from mlsgalerkin.analysis.convergence import (
     ROUNDOFF,
+    ObservedOrder,
     PowerLawFit,
     fit_power_law,
+    observed_order,
     observed_orders,
 )
 from mlsgalerkin.analysis.norms import (
@@ -17,8 +19,10 @@ from mlsgalerkin.analysis.norms import (
 
 __all__ = [
     "ROUNDOFF",
+    "ObservedOrder",
     "PowerLawFit",
     "fit_power_law",
+    "observed_order",
     "observed_orders",
     "ErrorNorms",
     "Quadrature",

@@ -2,24 +2,34 @@
 
 An error that behaves like ``e = C h**p`` is a straight line in log-log; :func:`fit_power_law`
 fits it by least squares over all points, :func:`observed_orders` gives the slope between each
-pair of consecutive points.
+pair of consecutive points, and :func:`observed_order` gives the two numbers a refinement study
+reports: the least-squares order over all levels and the order between the two finest levels.
 
 >>> fit = fit_power_law([0.1, 0.2, 0.4], [0.02, 0.08, 0.32])
 >>> round(fit.exponent, 6), round(fit.prefactor, 6), fit.n_points
 (2.0, 2.0, 3)
 >>> observed_orders([0.4, 0.2, 0.1], [0.32, 0.08, 0.02]).round(6).tolist()
 [2.0, 2.0]
+>>> observed_order([0.4, 0.2, 0.1], [1.6e-2, 4e-3, 1e-3])
+ObservedOrder(least_squares=2.0, finest_pair=2.0)
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Iterable
+from typing import Iterable, NamedTuple
 
 import numpy as np
 
-__all__ = ["ROUNDOFF", "PowerLawFit", "fit_power_law", "observed_orders"]
+__all__ = [
+    "ROUNDOFF",
+    "ObservedOrder",
+    "PowerLawFit",
+    "fit_power_law",
+    "observed_order",
+    "observed_orders",
+]
 
 #: Errors below this are round-off; they are skipped by the power-law fits.
 ROUNDOFF = 1e-13
@@ -103,3 +113,42 @@ def observed_orders(h: Iterable[float], err: Iterable[float]) -> np.ndarray:
         if all(np.isfinite(v) and v > 0 for v in (h0, h1, e0, e1)) and h0 != h1:
             out[i] = math.log(e1 / e0) / math.log(h1 / h0)
     return out
+
+
+class ObservedOrder(NamedTuple):
+    """Observed order of convergence of a refinement series (``error ~ C h**p``).
+
+    ``least_squares`` is the slope of ``log error`` against ``log h`` over all usable levels
+    (:func:`fit_power_law`), ``finest_pair`` the slope between the two smallest spacings. Both
+    are NaN when fewer than two usable levels remain.
+    """
+
+    least_squares: float
+    finest_pair: float
+
+
+def observed_order(
+    spacings: Iterable[float], errors: Iterable[float], floor: float = ROUNDOFF
+) -> ObservedOrder:
+    """Least-squares order over all levels and the order between the two finest levels.
+
+    Levels whose error is at or below ``floor`` (round-off) or not finite, or whose spacing is
+    not finite and positive, are dropped first; the rest are sorted by spacing. Both orders are
+    rounded to 12 decimals (NaN with fewer than two distinct usable spacings).
+
+    >>> observed_order([0.2, 0.1], [1e-14, 1e-15]).least_squares  # round-off is not fitted
+    nan
+    """
+    h = np.asarray(list(spacings), dtype=float)
+    e = np.asarray(list(errors), dtype=float)
+    if h.shape != e.shape or h.ndim != 1:
+        raise ValueError("spacings and errors must be 1D sequences of the same length")
+    keep = np.isfinite(h) & np.isfinite(e) & (h > 0) & (e > floor)
+    h, e = h[keep], e[keep]
+    if h.size < 2 or np.unique(h).size < 2:
+        return ObservedOrder(math.nan, math.nan)
+    order = np.argsort(h)
+    h, e = h[order], e[order]
+    fit = fit_power_law(h, e, floor=floor, min_points=2)
+    finest = observed_orders(h[:2], e[:2])[0]
+    return ObservedOrder(fit.exponent, round(float(finest), 12))

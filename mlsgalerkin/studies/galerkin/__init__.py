@@ -4,20 +4,21 @@ Modules, one purpose each:
 
 ``problems``  exact solutions, loads, boundary data and node sets (patch tests, manufactured
               Poisson, Timoshenko cantilever)
-``vci``       variationally consistent integration of DNI (a third rule, beyond the sources)
 ``runner``    one measured solve (wall time split into shape functions, assembly, solve) and
               the stiffness spectrum of one discretisation
-``sweeps``    the configuration, the points of each sweep and the observed orders
-``plots``     convergence, work-precision, wall split, h-sweep and spectrum figures
-``report``    ``summary.md`` and the console report
-``output``    atomic files, CSV and provenance
-``study``     :func:`run_galerkin_study`, which runs it all
+``sweeps``    the configuration, the grid points of each sweep, the measurement of one point
+              and the observed orders
+``result``    :class:`GalerkinStudyResult` and its console report
+``study``     :func:`run_galerkin_study`: the grid on the study engine, tables, provenance
 
-Run with ``mlsgalerkin study galerkin --quick --out results/demo`` or
-``python verification/galerkin_convergence.py``.
+The report (``summary.md`` with the observations, the study's figures) is written by
+``verification/galerkin_convergence.py``. Run the numbers alone with
+``mlsgalerkin study galerkin --quick --out results/demo``.
 """
 
-from mlsgalerkin.studies.galerkin.report import GalerkinStudyResult
-from mlsgalerkin.studies.galerkin.study import COLUMNS, run_galerkin_study
+from __future__ import annotations
 
-__all__ = ["COLUMNS", "GalerkinStudyResult", "run_galerkin_study"]
+from mlsgalerkin.studies.galerkin.result import GalerkinStudyResult
+from mlsgalerkin.studies.galerkin.study import COLUMNS, ORDER_COLUMNS, run_galerkin_study
+
+__all__ = ["COLUMNS", "GalerkinStudyResult", "ORDER_COLUMNS", "run_galerkin_study"]

@@ -28,7 +28,7 @@ Rules
 Essential conditions use symmetric Nitsche (``β = 100``, modulus ``E`` for elasticity) or
 penalty (``β = 1e4``) on the boundary Gauss points of the rule's Voronoi cell edges. The flux
 in Nitsche's terms uses the *rule's* gradient at the nearest integration point
-(``gradients="rule"`` of :func:`~mlsgalerkin.boundary.boundary_basis`) for every rule; see
+(``gradients="rule"`` of :func:`~mlsgalerkin.integration.boundary_basis`) for every rule; see
 :data:`BOUNDARY_GRADIENTS` for why.
 """
 
@@ -64,6 +64,7 @@ __all__ = [
     "measure",
     "spectrum",
     "RULES",
+    "RULE_LABELS",
     "BASES",
     "BCS",
     "NITSCHE_BETA",
@@ -74,6 +75,9 @@ __all__ = [
 logger = logging.getLogger(__name__)
 
 RULES = ("dni", "scni", "vci")
+#: How the rules are named in tables and figures.
+RULE_LABELS = {"dni": "DNI", "scni": "SCNI", "vci": "VCI",
+               "vci_constant": "VCI (constant profile)"}
 #: Extra rule names a spec accepts: VCI with the constant correction profile (ablation).
 EXTRA_RULES = ("vci_constant",)
 BASES = ("linear", "quadratic")

@@ -1,4 +1,4 @@
-r"""The study's three sweeps, their configuration, and the observed orders.
+r"""The study's three sweeps: configuration, grid points, the measurement of one point, orders.
 
 ``patch``
     Linear patch tests (:func:`~.problems.poisson_patch`, :func:`~.problems.elastic_patch`) on
@@ -23,21 +23,26 @@ point, including the domain corners, where a support radius of 3Δx holds only a
 nodes; 4Δx leaves a margin (no fallback to a lower order anywhere in the study, see the
 ``n_fallback`` column). The h-sweep shows what happens at other radii.
 
->>> fit = observed_order([0.4, 0.2, 0.1], [1.6e-2, 4e-3, 1e-3])
->>> round(fit[0], 6), round(fit[1], 6)
-(2.0, 2.0)
+Grid points
+-----------
+:func:`study_points` turns the specs of the three sweeps into the study engine's grid points
+(the fields of :class:`~.runner.SolveSpec` plus ``study``); :func:`measure_solve` measures one
+(untimed repeats for the patch tests; the stiffness spectrum for the h-sweep) and
+:func:`warm_up` loads the numba kernels in each worker before any timing.
+
+>>> cfg = make_config(quick=True)
+>>> len(study_points(cfg)), study_points(cfg)[0]["study"]
+(96, 'patch')
 """
 
 from __future__ import annotations
 
 import logging
-import math
 from collections import defaultdict
-from dataclasses import dataclass, field
-from typing import Callable, Iterable
+from dataclasses import asdict, dataclass, field
+from typing import Any
 
-import numpy as np
-
+from mlsgalerkin.analysis.convergence import observed_order
 from mlsgalerkin.studies.galerkin.runner import SolveSpec, measure, spectrum
 
 __all__ = [
@@ -47,9 +52,13 @@ __all__ = [
     "convergence_specs",
     "sweep_specs",
     "warm_up_specs",
-    "run_sweep",
-    "observed_order",
+    "study_points",
+    "measure_solve",
+    "warm_up",
+    "energy_quantity",
     "fit_orders",
+    "ORDER_QUANTITIES",
+    "SPECTRUM_COLUMNS",
     "SUPPORT_RATIO",
     "ROUNDOFF",
 ]
@@ -213,32 +222,50 @@ def warm_up_specs(cfg: GalerkinConfig) -> list[SolveSpec]:
     return out
 
 
-def run_sweep(study: str, specs: Iterable[SolveSpec], cfg: GalerkinConfig,
-              tick: Callable[[], None] | None = None, *, with_spectrum: bool = False,
-              timed: bool = True) -> tuple[list[dict], dict]:
-    """Measure every spec; returns the rows (``study`` column set) and, with ``with_spectrum``,
-    the normalised stiffness spectra keyed by spec."""
-    rows, spectra = [], {}
+def study_points(cfg: GalerkinConfig) -> list[dict[str, Any]]:
+    """Grid points of the whole study: patch tests, convergence, h-sweep (in this order)."""
+    return [{"study": study, **asdict(spec)}
+            for study, specs in (("patch", patch_specs(cfg)),
+                                 ("convergence", convergence_specs(cfg)),
+                                 ("h_sweep", sweep_specs(cfg)))
+            for spec in specs]
+
+
+#: Columns of the h-sweep rows that come from :func:`~.runner.spectrum`.
+SPECTRUM_COLUMNS = ("n_rigid", "n_zero_modes", "n_spurious_modes", "eig_below", "eig_above",
+                    "eig_gap", "eig_first", "energy_ratio_max", "n_soft_modes", "nitsche_ci",
+                    "eig_tol", "spectrum")
+
+
+def measure_solve(cfg: GalerkinConfig, study: str, problem: str, rule: str, basis: str,
+                  kernel: str, support_ratio: float, spacing: float, nodes: str, bc: str,
+                  seed: int) -> dict[str, Any]:
+    """The CSV row of one grid point of :func:`study_points` (a :class:`~.runner.SolveSpec`
+    and the sweep it belongs to).
+
+    Patch tests are solved once; convergence and h-sweep points are timed with the repeat
+    policy of ``cfg`` (``min_time``, ``max_repeats``); h-sweep points add the
+    :data:`SPECTRUM_COLUMNS` and ``eigenvalues`` (the normalised stiffness spectrum, ascending;
+    not a CSV column).
+    """
+    spec = SolveSpec(problem, rule, basis, kernel, support_ratio, spacing, nodes, bc, seed)
+    if study == "patch":
+        row = measure(spec, min_time=0.0, max_repeats=1)
+    else:
+        row = measure(spec, min_time=cfg.min_time, max_repeats=cfg.max_repeats)
+    if study == "h_sweep":
+        srow, vals = spectrum(spec, tol=cfg.eig_tol)
+        row.update({k: srow[k] for k in SPECTRUM_COLUMNS}, eigenvalues=vals)
+    logger.debug("%s %s %s %s %s r=%g dx=%g: L2 %.3g, H1 %.3g, %.3f s", study, spec.problem,
+                 spec.rule, spec.basis, spec.kernel, spec.support_ratio, spec.spacing,
+                 row["error_l2"], row["error_h1"], row["wall_s"])
+    return row
+
+
+def warm_up(specs: tuple[SolveSpec, ...]) -> None:
+    """Solve ``specs`` once, untimed (loads the numba kernels before any measurement)."""
     for spec in specs:
-        if timed:
-            row = measure(spec, min_time=cfg.min_time, max_repeats=cfg.max_repeats)
-        else:
-            row = measure(spec, min_time=0.0, max_repeats=1)
-        if with_spectrum:
-            srow, vals = spectrum(spec, tol=cfg.eig_tol)
-            for k in ("n_rigid", "n_zero_modes", "n_spurious_modes", "eig_below", "eig_above",
-                      "eig_gap", "eig_first", "energy_ratio_max", "n_soft_modes", "nitsche_ci",
-                      "eig_tol", "spectrum"):
-                row[k] = srow[k]
-            spectra[spec] = vals
-        row = {"study": study, **row}
-        rows.append(row)
-        logger.debug("%s %s %s %s %s r=%g dx=%g: L2 %.3g, H1 %.3g, %.3f s", study, spec.problem,
-                     spec.rule, spec.basis, spec.kernel, spec.support_ratio, spec.spacing,
-                     row["error_l2"], row["error_h1"], row["wall_s"])
-        if tick is not None:
-            tick()
-    return rows, spectra
+        measure(spec, min_time=0.0, max_repeats=1)
 
 
 # --------------------------------------------------------------------------------------
@@ -246,29 +273,19 @@ def run_sweep(study: str, specs: Iterable[SolveSpec], cfg: GalerkinConfig,
 # --------------------------------------------------------------------------------------
 
 
-def observed_order(spacings: Iterable[float], errors: Iterable[float],
-                   floor: float = ROUNDOFF) -> tuple[float, float]:
-    """Least-squares slope of ``log error`` against ``log spacing`` over all levels, and the
-    slope between the two finest levels. NaN when fewer than two usable levels remain (errors
-    at or below ``floor`` or not finite are dropped)."""
-    h = np.asarray(list(spacings), float)
-    e = np.asarray(list(errors), float)
-    keep = np.isfinite(h) & np.isfinite(e) & (h > 0) & (e > floor)
-    h, e = h[keep], e[keep]
-    if h.size < 2 or np.unique(h).size < 2:
-        return math.nan, math.nan
-    order = np.argsort(h)
-    h, e = h[order], e[order]
-    fit = float(np.polyfit(np.log(h), np.log(e), 1)[0])
-    last = float(np.log(e[1] / e[0]) / np.log(h[1] / h[0]))
-    return round(fit, 12), round(last, 12)
+def energy_quantity(problem: str) -> tuple[str, str]:
+    """The column and name of ``problem``'s energy-type error: the energy norm for the
+    Timoshenko beam, the H1 seminorm (the energy norm of Poisson) otherwise."""
+    return ("error_energy", "energy") if problem == "timoshenko" else ("error_h1", "H1")
 
 
 ORDER_QUANTITIES = ("error_l2", "error_h1", "error_energy", "error_h1_rule")
 
 
-def fit_orders(rows: list[dict]) -> list[dict]:
-    """Observed orders per convergence series (problem, rule, basis, kernel, nodes)."""
+def fit_orders(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Observed orders per convergence series (problem, rule, basis, kernel, nodes):
+    :func:`~mlsgalerkin.analysis.convergence.observed_order` of every error of
+    :data:`ORDER_QUANTITIES` against the spacing, and the errors at the finest level."""
     series: dict[tuple, list[dict]] = defaultdict(list)
     for r in rows:
         if r["study"] == "convergence":
@@ -283,7 +300,7 @@ def fit_orders(rows: list[dict]) -> list[dict]:
                    spacing_min=fin["spacing"], spacing_max=rs[0]["spacing"],
                    n_nodes_max=fin["n_nodes"], wall_s_finest=fin["wall_s"])
         for q in ORDER_QUANTITIES:
-            fit, last = observed_order(spacings, [r[q] for r in rs])
+            fit, last = observed_order(spacings, [r[q] for r in rs], floor=ROUNDOFF)
             key = q.removeprefix("error_")
             row[f"order_{key}"] = fit
             row[f"order_{key}_last"] = last

@@ -24,51 +24,47 @@ Part 2 — shape functions
     errors against ``h/Δx`` and against ``Δx``.
 
 Errors are RMS (seed eq. 12.67) over two regions: ``interior`` (evaluation points whose
-support ``[x - κh, x + κh]`` lies inside the domain) and ``all``. Every measured point records
-its wall time (``time.perf_counter`` around building the approximation plus applying it to one
-function; short calls are repeated and averaged) and its neighbour count.
+support ``[x - κh, x + κh]`` lies inside the domain) and ``all``. Every measured row records its
+wall time ``wall_s`` (``time.perf_counter`` around building the approximation plus applying it to
+one function; short calls are repeated, best time kept) and its neighbour count; the grid runs on
+the study engine (:mod:`mlsgalerkin.studies.engine`), so ``worker`` says who measured it.
+
+This package computes the numbers (rows, fits, key numbers); the report with the source's claims,
+the findings and the figures is written by ``verification/kernel_study.py``.
 
 Modules
 -------
-``config``           output columns, test functions, :class:`StudyConfig`, :func:`make_config`
-``measure``          RMS errors, interior masks, timing of one point
-``sph``              integral and particle approximations, the SPH sweep (part 1)
-``layouts``          jittered 1D particles and their volumes, 2D node sets
-``meshfree``         MLS/RKPM/Shepard sweeps in 1D and 2D, numba warm-up (part 2)
-``records``          :class:`KernelStudyResult`, the row recorder, row selection
-``fits``             power-law fits of every series (:mod:`mlsgalerkin.analysis.convergence`)
-``claims``           the numbers behind the source's claims and the MLS comparison
-``plot_style``       colours, markers and axes shared by the figures
-``plots``            the PNG figures
-``markdown``         number and table formatting of ``summary.md``
-``report``           ``summary.md``: provenance, set-up, part 1 and the claims
-``report_meshfree``  ``summary.md``: part 2 tables and findings
-``output``           CSV formatting and the provenance record
-``study``            :func:`run_kernel_study`, the entry point
+``config``    output columns, test functions, :class:`StudyConfig`, :func:`make_config`
+``measure``   RMS errors, interior masks, the rows of one point per region
+``sph``       integral and particle approximations, the points and measurement of part 1
+``layouts``   jittered 1D particles and their volumes, 2D node sets
+``meshfree``  MLS/RKPM/Shepard: points and measurement of part 2, numba warm-up
+``fits``      power-law fits of every series (:mod:`mlsgalerkin.analysis.convergence`)
+``headline``  the key numbers (slopes, 5-neighbour errors, 2D orders)
+``output``    CSV number formats
+``result``    :class:`KernelStudyResult` and its console report
+``study``     :func:`run_kernel_study`, the entry point
 
 Example
 -------
->>> from mlsgalerkin.studies.kernels import fit_power_law
->>> fit = fit_power_law([0.1, 0.2, 0.4], [0.02, 0.08, 0.32])
->>> round(fit.exponent, 6)
-2.0
+>>> from mlsgalerkin.studies.kernels import make_config, study_grid
+>>> len(study_grid(make_config(quick=True)))
+538
 
 Run the study with ``mlsgalerkin study kernels --quick --out results/demo`` or
-:func:`run_kernel_study`.
+:func:`run_kernel_study`; the full report with ``python verification/kernel_study.py``.
 """
 
 from __future__ import annotations
 
-from mlsgalerkin.analysis.convergence import PowerLawFit, fit_power_law
-from mlsgalerkin.studies.kernels.claims import kernel_diagnostics
 from mlsgalerkin.studies.kernels.config import (
     CLAIM_FUNCTIONS,
     COLUMNS,
     DOMAIN_1D,
     FIT_COLUMNS,
     FUNCTIONS,
+    FUNCTIONS_BY_LABEL,
     METHOD_SPECS,
-    ROUNDOFF,
     SMOOTH_FUNCTIONS,
     U2D_LABEL,
     U2D_TEXT,
@@ -78,20 +74,35 @@ from mlsgalerkin.studies.kernels.config import (
     make_config,
     u2d,
 )
-from mlsgalerkin.studies.kernels.fits import compute_fits
+from mlsgalerkin.studies.kernels.fits import compute_fits, fit_lookup
+from mlsgalerkin.studies.kernels.headline import (
+    five_neighbour_errors,
+    headline,
+    orders_2d,
+    sph_slopes,
+)
 from mlsgalerkin.studies.kernels.layouts import jittered_particles_1d, local_spacing, nodes_2d
-from mlsgalerkin.studies.kernels.measure import interior_mask, rms_error
-from mlsgalerkin.studies.kernels.output import provenance
-from mlsgalerkin.studies.kernels.records import KernelStudyResult
+from mlsgalerkin.studies.kernels.measure import interior_mask, region_rows, rms_error
+from mlsgalerkin.studies.kernels.meshfree import (
+    build_shapes,
+    measure_mls_1d,
+    measure_mls_2d,
+    mls_points,
+    warm_up,
+)
+from mlsgalerkin.studies.kernels.result import KernelStudyResult
 from mlsgalerkin.studies.kernels.sph import (
     ParticleSum,
     integral_approximation,
+    measure_integral,
+    measure_particle,
     neighbors_1d,
     particle_approximation,
     particle_sum,
     quadrature_offsets,
+    sph_points,
 )
-from mlsgalerkin.studies.kernels.study import run_kernel_study
+from mlsgalerkin.studies.kernels.study import measure_point, run_kernel_study, study_grid
 
 __all__ = [
     "CLAIM_FUNCTIONS",
@@ -99,32 +110,44 @@ __all__ = [
     "DOMAIN_1D",
     "FIT_COLUMNS",
     "FUNCTIONS",
-    "KernelStudyResult",
+    "FUNCTIONS_BY_LABEL",
     "METHOD_SPECS",
-    "ParticleSum",
-    "PowerLawFit",
-    "ROUNDOFF",
     "SMOOTH_FUNCTIONS",
-    "StudyConfig",
-    "StudyFunction",
     "U2D_LABEL",
     "U2D_TEXT",
+    "KernelStudyResult",
+    "ParticleSum",
+    "StudyConfig",
+    "StudyFunction",
+    "build_shapes",
     "compute_fits",
-    "fit_power_law",
+    "fit_lookup",
+    "five_neighbour_errors",
     "grad_u2d",
+    "headline",
     "integral_approximation",
     "interior_mask",
     "jittered_particles_1d",
-    "kernel_diagnostics",
     "local_spacing",
     "make_config",
+    "measure_integral",
+    "measure_mls_1d",
+    "measure_mls_2d",
+    "measure_particle",
+    "measure_point",
+    "mls_points",
     "neighbors_1d",
     "nodes_2d",
+    "orders_2d",
     "particle_approximation",
     "particle_sum",
-    "provenance",
     "quadrature_offsets",
+    "region_rows",
     "rms_error",
     "run_kernel_study",
+    "sph_points",
+    "sph_slopes",
+    "study_grid",
     "u2d",
+    "warm_up",
 ]

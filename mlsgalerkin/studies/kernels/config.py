@@ -53,6 +53,7 @@ COLUMNS = [
     "cond_max",
     "n_fallback",
     "wall_s",
+    "worker",
 ]
 FIT_COLUMNS = [
     "part",

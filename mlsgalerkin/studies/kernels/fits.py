@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections import defaultdict
+from typing import Any
 
 import numpy as np
 
@@ -21,7 +22,7 @@ _SWEEP_X = {
 }
 
 
-def compute_fits(rows: list[dict]) -> list[dict]:
+def compute_fits(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Power-law fits of every (part, approximation, layout, kernel, function, sweep, region).
 
     The x variable is the swept quantity (``h``, ``n_neighbors`` for the integral sweep, ``N`` for
@@ -45,8 +46,6 @@ def compute_fits(rows: list[dict]) -> list[dict]:
     for key, rs in groups.items():
         sweep = key[5]
         xname = _SWEEP_X[sweep]
-        if sweep == "n_particles":
-            xname = "n_particles"
         xs = [r[xname] for r in rs]
         for q in ("error_abs", "error_rel", "error_grad"):
             ys = [r[q] for r in rs]
@@ -69,7 +68,7 @@ def compute_fits(rows: list[dict]) -> list[dict]:
     return fits
 
 
-def fit_lookup(fits: list[dict]) -> dict[tuple, dict]:
+def fit_lookup(fits: list[dict[str, Any]]) -> dict[tuple, dict[str, Any]]:
     """Fits keyed by (part, approximation, layout, kernel, function, sweep, region, quantity)."""
     return {
         (

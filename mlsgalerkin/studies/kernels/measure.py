@@ -1,14 +1,13 @@
-"""Measuring one point of the study: RMS errors, interior masks and wall times."""
+"""Measuring one point of the kernel study: RMS errors, interior masks and the rows per region."""
 
 from __future__ import annotations
 
 import math
-import time
-from typing import Callable
+from typing import Any
 
 import numpy as np
 
-__all__ = ["interior_mask", "rms_error", "timed"]
+__all__ = ["interior_mask", "region_rows", "rms_error"]
 
 
 def rms_error(
@@ -32,25 +31,6 @@ def rms_error(
     return err, (err / ref if ref > 0 else math.nan)
 
 
-def timed(fn: Callable[[], object], min_time: float, repeats: int = 1) -> tuple[object, float]:
-    """Run ``fn`` and return ``(result, seconds per call)``.
-
-    After the first call, ``repeats`` groups of calls, each lasting at least about ``min_time``,
-    are timed; the result is the best per-call time seen (the minimum is the estimator least
-    disturbed by other processes on a shared machine).
-    """
-    t0 = time.perf_counter()
-    out = fn()
-    best = time.perf_counter() - t0
-    n = int(min(200, max(1, math.ceil(min_time / max(best, 1e-7)))))
-    for _ in range(repeats if (repeats > 1 or best < min_time) else 0):
-        t0 = time.perf_counter()
-        for _ in range(n):
-            fn()
-        best = min(best, (time.perf_counter() - t0) / n)
-    return out, best
-
-
 def interior_mask(x: np.ndarray, radius: float, lo: float = 0.0, hi: float = 1.0) -> np.ndarray:
     """Points whose ball of ``radius`` lies inside ``[lo, hi]^dim`` (1e-12 tolerance)."""
     x = np.asarray(x, float)
@@ -58,3 +38,47 @@ def interior_mask(x: np.ndarray, radius: float, lo: float = 0.0, hi: float = 1.0
         x = x[:, None]
     tol = 1e-12
     return np.all((x - radius >= lo - tol) & (x + radius <= hi + tol), axis=1)
+
+
+def region_rows(
+    base: dict[str, Any],
+    masks: dict[str, np.ndarray],
+    approx: np.ndarray,
+    exact: np.ndarray,
+    *,
+    wall_s: float,
+    counts: np.ndarray | float | None = None,
+    grad: np.ndarray | None = None,
+    grad_exact: np.ndarray | None = None,
+    cond: np.ndarray | None = None,
+) -> list[dict[str, Any]]:
+    """One row per non-empty region of ``masks``: ``base`` plus the RMS errors of ``approx``
+    (and ``grad``) against the exact values, the largest gradient error and condition number,
+    the mean neighbour count and ``wall_s`` (seconds)."""
+    rows = []
+    gerr = None if grad is None else np.linalg.norm(np.asarray(grad) - grad_exact, axis=1)
+    for region, mask in masks.items():
+        if not np.any(mask):
+            continue
+        ea, er = rms_error(approx, exact, mask)
+        ga = gr = gm = cm = math.nan
+        if grad is not None:
+            ga, gr = rms_error(grad, grad_exact, mask)
+            gm = float(gerr[mask].max())
+        if cond is not None:
+            cm = float(np.max(cond[mask]))
+        nnb = float(np.mean(counts[mask])) if isinstance(counts, np.ndarray) else counts
+        rows.append({
+            **base,
+            "region": region,
+            "n_eval": int(np.count_nonzero(mask)),
+            "error_abs": ea,
+            "error_rel": er,
+            "error_grad": ga,
+            "error_grad_rel": gr,
+            "error_grad_max": gm,
+            "cond_max": cm,
+            "n_neighbors": nnb,
+            "wall_s": wall_s,
+        })
+    return rows

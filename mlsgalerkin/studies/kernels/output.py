@@ -1,18 +1,15 @@
-"""Files of the kernel study: CSV cells of the rows and fits, and its provenance record."""
+"""CSV cells of the kernel study's rows and fits (the study's number formats)."""
 
 from __future__ import annotations
 
-from typing import Iterator
-
+from typing import Any, Iterator
 
 from mlsgalerkin.io.files import format_cell
-from mlsgalerkin.io.provenance import provenance as common_provenance
-from mlsgalerkin.studies.kernels.config import StudyConfig
 
-__all__ = ["csv_cells", "provenance"]
+__all__ = ["csv_cells"]
 
-
-_SHORT = {
+#: Columns written to 4 significant digits (errors, ratios, spacings, fit results).
+_FOUR_DIGITS = {
     "error_abs",
     "error_rel",
     "error_grad",
@@ -26,24 +23,16 @@ _SHORT = {
     "h_over_dx",
     "spacing",
 }
-_SHORTER = {"wall_s"}
+#: Columns written to 3 significant digits (wall times).
+_THREE_DIGITS = {"wall_s"}
 
 
-def _fmt(v, short: bool | str = False) -> str:
-    return format_cell(v, digits=3 if short == "3" else 4 if short else 6, nan="")
-
-
-def csv_cells(rows: list[dict], columns: list[str]) -> Iterator[list[str]]:
+def csv_cells(rows: list[dict[str, Any]], columns: list[str]) -> Iterator[list[str]]:
     """Formatted cells of each row: errors, ratios and spacings to 4 significant digits,
     ``wall_s`` to 3, other floats to 6; ``None`` and NaN empty."""
     for r in rows:
-        yield [_fmt(r.get(c), "3" if c in _SHORTER else c in _SHORT) for c in columns]
-
-
-def provenance(cfg: StudyConfig, extra: dict | None = None) -> dict:
-    """Command line, versions, git commit, UTC date and machine of this run."""
-    return common_provenance(
-        "kernel_study",
-        mode="quick" if cfg.quick else "full",
-        extra={"seed": cfg.seed, **(extra or {})},
-    )
+        yield [
+            format_cell(r.get(c), digits=3 if c in _THREE_DIGITS else 4 if c in _FOUR_DIGITS else 6,
+                        nan="")
+            for c in columns
+        ]

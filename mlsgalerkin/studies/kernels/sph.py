@@ -9,24 +9,26 @@ equally spaced particles. Both are vectorised numpy (no compiled code).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
 from mlsgalerkin.kernels import Kernel, get_kernel
 from mlsgalerkin.neighbors import NeighborTable
+from mlsgalerkin.studies.engine.timing import best_time
 from mlsgalerkin.studies.kernels.config import DOMAIN_1D, FUNCTIONS, StudyConfig
-from mlsgalerkin.studies.kernels.measure import interior_mask, timed
-from mlsgalerkin.studies.kernels.records import Recorder
+from mlsgalerkin.studies.kernels.measure import interior_mask, region_rows
 
 __all__ = [
     "ParticleSum",
     "integral_approximation",
+    "measure_integral",
+    "measure_particle",
     "neighbors_1d",
     "particle_approximation",
     "particle_sum",
     "quadrature_offsets",
-    "run_sph",
+    "sph_points",
 ]
 
 
@@ -111,72 +113,91 @@ def particle_approximation(
 
 
 # --------------------------------------------------------------------------------------
-# part 1: the SPH sweep
+# part 1: the points of the SPH sweeps and their measurement
 # --------------------------------------------------------------------------------------
 
 
-def run_sph(cfg: StudyConfig, rec: Recorder) -> None:
-    """Part 1: integral (h, N_nb) and particle (h, N) sweeps of every SPH kernel."""
+def sph_points(cfg: StudyConfig) -> list[dict[str, Any]]:
+    """Grid points of part 1: integral (h, N_nb) and particle (h, N) sweeps of every kernel."""
+    points: list[dict[str, Any]] = []
+    for kernel in cfg.sph_kernels:
+        base = dict(part="sph", approximation="integral", kernel=kernel)
+        points += [dict(base, sweep="h", h=h, n_neighbors=cfg.int_nnb_fixed) for h in cfg.int_h]
+        points += [dict(base, sweep="n_neighbors", h=cfg.int_h_fixed, n_neighbors=n)
+                   for n in cfg.int_nnb]
+        base = dict(part="sph", approximation="particle", kernel=kernel)
+        points += [dict(base, sweep="h", h=h, n_particles=cfg.part_n_fixed) for h in cfg.part_h]
+        points += [dict(base, sweep="n_particles", h=cfg.part_h_fixed, n_particles=n)
+                   for n in cfg.part_n]
+    return points
+
+
+def measure_integral(cfg: StudyConfig, kernel: str, sweep: str, h: float,
+                     n_neighbors: int) -> list[dict[str, Any]]:
+    """Rows (every function x region) of the integral approximation at ``h`` with
+    ``n_neighbors`` quadrature points; ``wall_s`` is the best time of one approximation."""
     lo, hi = DOMAIN_1D
     x_eval = np.linspace(lo, hi, cfg.n_eval_1d)
-    for kname in cfg.sph_kernels:
-        k = get_kernel(kname)
-        # integral approximation
-        sweeps = [("h", h, cfg.int_nnb_fixed) for h in cfg.int_h]
-        sweeps += [("n_neighbors", cfg.int_h_fixed, n) for n in cfg.int_nnb]
-        for sweep, h, nnb in sweeps:
-            masks = {
-                "interior": interior_mask(x_eval, k.support * h, lo, hi),
-                "all": np.ones(x_eval.shape, bool),
-            }
-            dxq = 2.0 * k.support * h / nnb
-            for fn in FUNCTIONS:
-                approx, t = timed(
-                    lambda: integral_approximation(fn.f, x_eval, k, h, nnb),
-                    cfg.min_time,
-                    cfg.repeats,
-                )
-                base = dict(
-                    part="sph",
-                    approximation="integral",
-                    layout="quadrature",
-                    kernel=kname,
-                    function=fn.label,
-                    sweep=sweep,
-                    h=h,
-                    h_over_dx=h / dxq,
-                    n_particles=None,
-                    spacing=dxq,
-                    n_fallback=None,
-                )
-                rec.add(base, masks, approx, fn.f(x_eval), wall_s=t, counts=float(nnb))
-            rec.tick()
-        # particle approximation
-        sweeps = [("h", h, cfg.part_n_fixed) for h in cfg.part_h]
-        sweeps += [("n_particles", cfg.part_h_fixed, n) for n in cfg.part_n]
-        for sweep, h, n in sweeps:
-            x = np.linspace(lo, hi, n)
-            dx = (hi - lo) / (n - 1)
-            masks = {
-                "interior": interior_mask(x, k.support * h, lo, hi),
-                "all": np.ones(x.shape, bool),
-            }
-            ps, t_build = timed(lambda: particle_sum(x, k, h), cfg.min_time, cfg.repeats)
-            for fn in FUNCTIONS:
-                fx = fn.f(x)
-                approx, t = timed(lambda: ps.apply(fn.f(x)), cfg.min_time, cfg.repeats)
-                base = dict(
-                    part="sph",
-                    approximation="particle",
-                    layout="uniform",
-                    kernel=kname,
-                    function=fn.label,
-                    sweep=sweep,
-                    h=h,
-                    h_over_dx=h / dx,
-                    n_particles=n,
-                    spacing=dx,
-                    n_fallback=None,
-                )
-                rec.add(base, masks, approx, fx, wall_s=t_build + t, counts=ps.counts)
-            rec.tick()
+    k = get_kernel(kernel)
+    masks = {
+        "interior": interior_mask(x_eval, k.support * h, lo, hi),
+        "all": np.ones(x_eval.shape, bool),
+    }
+    dxq = 2.0 * k.support * h / n_neighbors
+    rows = []
+    for fn in FUNCTIONS:
+        approx, t = best_time(
+            lambda: integral_approximation(fn.f, x_eval, k, h, n_neighbors),
+            cfg.min_time,
+            cfg.repeats,
+        )
+        base = dict(
+            part="sph",
+            approximation="integral",
+            layout="quadrature",
+            kernel=kernel,
+            function=fn.label,
+            sweep=sweep,
+            h=h,
+            h_over_dx=h / dxq,
+            n_particles=None,
+            spacing=dxq,
+            n_fallback=None,
+        )
+        rows += region_rows(base, masks, approx, fn.f(x_eval), wall_s=t,
+                            counts=float(n_neighbors))
+    return rows
+
+
+def measure_particle(cfg: StudyConfig, kernel: str, sweep: str, h: float,
+                     n_particles: int) -> list[dict[str, Any]]:
+    """Rows of the particle approximation on ``n_particles`` equally spaced particles;
+    ``wall_s`` is the best time of building the sum plus applying it to one function."""
+    lo, hi = DOMAIN_1D
+    k = get_kernel(kernel)
+    x = np.linspace(lo, hi, n_particles)
+    dx = (hi - lo) / (n_particles - 1)
+    masks = {
+        "interior": interior_mask(x, k.support * h, lo, hi),
+        "all": np.ones(x.shape, bool),
+    }
+    ps, t_build = best_time(lambda: particle_sum(x, k, h), cfg.min_time, cfg.repeats)
+    rows = []
+    for fn in FUNCTIONS:
+        fx = fn.f(x)
+        approx, t = best_time(lambda: ps.apply(fn.f(x)), cfg.min_time, cfg.repeats)
+        base = dict(
+            part="sph",
+            approximation="particle",
+            layout="uniform",
+            kernel=kernel,
+            function=fn.label,
+            sweep=sweep,
+            h=h,
+            h_over_dx=h / dx,
+            n_particles=n_particles,
+            spacing=dx,
+            n_fallback=None,
+        )
+        rows += region_rows(base, masks, approx, fx, wall_s=t_build + t, counts=ps.counts)
+    return rows

@@ -1,182 +1,122 @@
-"""Entry point of the kernel study: run both parts and write the tables, plots and summary."""
+"""Run the kernel study on the study engine and write its tables, work-precision plot and
+provenance. The full report (``summary.md``, the study's figures) is written by
+``verification/kernel_study.py``."""
 
 from __future__ import annotations
 
-import json
+import functools
 import logging
 import time
 from pathlib import Path
+from typing import Any
 
-from mlsgalerkin.io.files import atomic_write, write_csv_rows
-from mlsgalerkin.studies.kernels.claims import analyse
-from mlsgalerkin.studies.kernels.config import (
-    COLUMNS,
-    FIT_COLUMNS,
-    SMOOTH_FUNCTIONS,
-    StudyConfig,
-    make_config,
-)
+from mlsgalerkin.io.files import write_csv_rows, write_json
+from mlsgalerkin.io.provenance import provenance
+from mlsgalerkin.studies.engine import Grid, numeric_environment, run_study
+from mlsgalerkin.studies.kernels.config import COLUMNS, FIT_COLUMNS, StudyConfig, make_config
 from mlsgalerkin.studies.kernels.fits import compute_fits
-from mlsgalerkin.studies.kernels.meshfree import (
-    Shapes,
-    get_shape_functions,
-    run_mls_1d,
-    run_mls_2d,
-    start_prewarm,
-    wait_prewarm,
-    warm_up,
-    warm_up_2d_linear,
-)
-from mlsgalerkin.studies.kernels.output import csv_cells, provenance
-from mlsgalerkin.studies.kernels.plots import plots_shape_functions, plots_sph
-from mlsgalerkin.studies.kernels.records import KernelStudyResult, Recorder
-from mlsgalerkin.studies.kernels.report import summary_text
-from mlsgalerkin.studies.kernels.report_meshfree import findings
-from mlsgalerkin.studies.kernels.sph import run_sph
+from mlsgalerkin.studies.kernels.headline import headline
+from mlsgalerkin.studies.kernels.meshfree import measure_mls_1d, measure_mls_2d, mls_points, warm_up
+from mlsgalerkin.studies.kernels.output import csv_cells
+from mlsgalerkin.studies.kernels.result import KernelStudyResult
+from mlsgalerkin.studies.kernels.sph import measure_integral, measure_particle, sph_points
 
-__all__ = ["run_kernel_study"]
+__all__ = ["measure_point", "run_kernel_study", "study_grid"]
 
 logger = logging.getLogger(__name__)
 
 
-def _n_tasks(cfg: StudyConfig, part2: bool) -> int:
-    n = len(cfg.sph_kernels) * (
-        len(cfg.int_h) + len(cfg.int_nnb) + len(cfg.part_h) + len(cfg.part_n)
-    )
-    if part2:
-        n += (
-            len(cfg.mls_kernels)
-            * len(cfg.mls_methods)
-            * (len(cfg.part_h) + len(cfg.mls_part_n) + len(cfg.refine_n))
-        )
-        n += (
-            len(cfg.kernels_2d)
-            * len(cfg.methods_2d)
-            * len(cfg.layouts_2d)
-            * (len(cfg.ratios_2d) + len(cfg.levels_2d))
-        )
-    return n
+def study_grid(cfg: StudyConfig) -> Grid:
+    """Every point of the study: the SPH sweeps (part 1), then the shape-function sweeps."""
+    return Grid.from_points(sph_points(cfg) + mls_points(cfg))
+
+
+def measure_point(
+    cfg: StudyConfig,
+    *,
+    part: str,
+    approximation: str,
+    kernel: str,
+    sweep: str,
+    h: float | None = None,
+    n_neighbors: int | None = None,
+    n_particles: int | None = None,
+    layout: str | None = None,
+    h_over_dx: float | None = None,
+    n_side: int | None = None,
+) -> list[dict[str, Any]]:
+    """The rows (one per function and region) of one grid point of :func:`study_grid`."""
+    if part == "sph" and approximation == "integral":
+        return measure_integral(cfg, kernel, sweep, h, n_neighbors)
+    if part == "sph":
+        return measure_particle(cfg, kernel, sweep, h, n_particles)
+    if part == "mls1d":
+        return measure_mls_1d(cfg, approximation, kernel, sweep, n_particles, h)
+    if part == "mls2d":
+        return measure_mls_2d(cfg, approximation, layout, kernel, sweep, h_over_dx, n_side)
+    raise ValueError(f"unknown part {part!r}; the study has parts 'sph', 'mls1d' and 'mls2d'")
 
 
 def run_kernel_study(
-    out: str | Path, quick: bool = False, progress: bool = True, prewarm: bool = True
+    out: str | Path, quick: bool = False, *, scheduler: Any = None, progress: bool = True
 ) -> KernelStudyResult:
-    """Run the study and write CSV tables, PNG plots, ``summary.md`` and ``provenance.json``.
+    """Run the study and write ``kernel_study.csv``, ``kernel_study_fits.csv``,
+    ``work_precision.png`` and ``provenance.json``.
 
     Parameters
     ----------
     out : output directory (created if needed).
     quick : fewer sweep points (the whole run takes well under 30 s).
+    scheduler : where the grid runs (:func:`~mlsgalerkin.studies.engine.run_study`): ``None``
+        for a local Dask cluster, ``"serial"``, or a Dask scheduler address.
     progress : show a tqdm progress bar over the measured points.
-    prewarm : compile the general shape-function kernel in a background process (numba on-disk
-        cache) while the SPH part runs; costs nothing when the cache is already warm.
     """
     t_start = time.perf_counter()
     cfg = make_config(quick)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    sf = get_shape_functions()
-    shapes = Shapes(sf) if sf is not None else None
-    extra: dict = {"part2": shapes is not None}
-    # numba compilation (cold cache: tens of seconds) is overlapped with the SPH part: a second
-    # process compiles the general shape-function kernel into numba's on-disk cache while this
-    # one runs the (pure numpy) SPH sums, compiles the neighbour search and the 2D-linear kernel,
-    # and draws the SPH plots. Nothing is timed before every kernel is compiled.
-    proc = start_prewarm() if (shapes is not None and prewarm) else None
-
-    rec = Recorder(progress, _n_tasks(cfg, shapes is not None))
-    jit = 0.0
-    import numba
-
-    threads_before = numba.get_num_threads()
-    # Timings are single-threaded: on a shared 2-core machine a parallel (prange) kernel waits
-    # for a descheduled thread and small problems get several times slower, at random.
-    numba.set_num_threads(max(1, min(cfg.threads, threads_before)))
-    extra["numba_threads"] = numba.get_num_threads()
-    try:
-        run_sph(cfg, rec)
-        logger.info("SPH part done: %d rows", len(rec.rows))
-        plots = plots_sph(rec.rows, cfg, out)
-        logger.info("SPH plots done")
-        if shapes is not None:
-            t0 = time.perf_counter()
-            warm_up_2d_linear(shapes, cfg)
-            wait_prewarm(proc)
-            warm_up(shapes, cfg)
-            jit = time.perf_counter() - t0
-            logger.info("JIT warm-up (after the SPH part) %.1f s", jit)
-            run_mls_1d(cfg, rec, shapes)
-            logger.info("1D shape functions done: %d rows", len(rec.rows))
-            run_mls_2d(cfg, rec, shapes)
-            logger.info("2D shape functions done: %d rows", len(rec.rows))
-    finally:
-        numba.set_num_threads(threads_before)
-        rec.close()
-        if proc is not None and proc.poll() is None:
-            proc.kill()
-            proc.wait()
-    extra["jit_warmup_s"] = round(jit, 2)
-    rows = rec.rows
-    t_measure = time.perf_counter() - t_start
-
+    study = run_study(
+        study_grid(cfg),
+        functools.partial(measure_point, cfg),
+        scheduler=scheduler,
+        warm_up=functools.partial(warm_up, cfg),
+        numba_threads=cfg.threads,
+        progress=progress,
+        description="kernel study",
+    )
+    rows = study.records
     fits = compute_fits(rows)
-    res = analyse(rows, fits, cfg)
-    res["part2_skipped"] = shapes is None
-    res["findings"] = findings(res, cfg)
-    if rec.notes:
-        res["findings"].append(
-            "Rank check (a point needs at least as many neighbours as basis terms for order ≥ 1): "
-            + "; ".join(rec.notes)
-            + ". Such a moment matrix is singular, so the point should "
-            "have fallen back to a lower order; its shape-function gradient is not trustworthy."
-        )
-        for note in rec.notes:
-            logger.warning("shape functions: %s", note)
-
-    csv_path = out / "kernel_study.csv"
-    fits_path = out / "kernel_study_fits.csv"
-    summary_path = out / "summary.md"
-    prov_path = out / "provenance.json"
-    write_csv_rows(csv_path, COLUMNS, csv_cells(rows, COLUMNS))
-    write_csv_rows(fits_path, FIT_COLUMNS, csv_cells(fits, FIT_COLUMNS))
-    logger.info("tables written")
-    plots += plots_shape_functions(rows, cfg, out)
-    logger.info("plots done")
+    csv_path = write_csv_rows(out / "kernel_study.csv", COLUMNS, csv_cells(rows, COLUMNS))
+    fits_path = write_csv_rows(out / "kernel_study_fits.csv", FIT_COLUMNS,
+                               csv_cells(fits, FIT_COLUMNS))
+    kernel_2d = cfg.kernels_2d[0]
+    plot = study.work_precision_plot(
+        out / "work_precision.png",
+        error="error_abs",
+        by=("approximation", "layout"),
+        time="wall_s",
+        where={"part": "mls2d", "sweep": "resolution", "region": "interior",
+               "kernel": kernel_2d},
+        title=f"2D {kernel_2d}, u = sin(πx)cos(πy) + xy², h = {cfg.ratio_fixed_2d:g} Δx, "
+              f"n = {min(cfg.levels_2d)}² … {max(cfg.levels_2d)}² nodes",
+        error_label="RMS error of u, interior points [-]",
+        time_label="wall time: shape functions + apply [s]",
+    )
     wall = time.perf_counter() - t_start
-    extra.update(
-        wall_s=round(wall, 2),
-        measure_s=round(t_measure, 2),
-        n_rows=len(rows),
-        call=dict(out=str(out), quick=quick, progress=progress),
-    )
-    prov = provenance(cfg, extra)
-    files = {
-        "csv": csv_path.name,
-        "fits": fits_path.name,
-        "provenance": prov_path.name,
-        **{p.stem: p.name for p in plots},
-    }
-    atomic_write(summary_path, summary_text(res, cfg, prov, files))
-    atomic_write(prov_path, json.dumps(prov, indent=2) + "\n")
-    headline = {
-        "beta_integral": {
-            k: {f: res["beta_integral"][k][f] for f in SMOOTH_FUNCTIONS} for k in cfg.sph_kernels
-        },
-        "worst_rel_5nb": res["worst_rel_5nb"],
-        "orders_2d": res.get("orders_2d", {}),
-        "part2_skipped": shapes is None,
-    }
+    prov = provenance("kernel_study", mode="quick" if quick else "full", extra={
+        "seed": cfg.seed,
+        "numba_threads": cfg.threads,
+        "scheduler": study.scheduler,
+        "workers": study.workers,
+        "environment": numeric_environment(),
+        "measure_s": round(study.wall_time_s, 2),
+        "wall_s": round(wall, 2),
+        "n_rows": len(rows),
+        "call": {"out": str(out), "quick": quick, "progress": progress},
+    })
+    prov_path = write_json(out / "provenance.json", prov)
     logger.info("kernel study finished in %.1f s", wall)
-    return KernelStudyResult(
-        out=out,
-        quick=quick,
-        csv_path=csv_path,
-        fits_path=fits_path,
-        summary_path=summary_path,
-        provenance_path=prov_path,
-        plots=plots,
-        rows=rows,
-        fits=fits,
-        headline=headline,
-        wall_s=wall,
-    )
+    return KernelStudyResult(out=out, config=cfg, csv_path=csv_path, fits_path=fits_path,
+                             provenance_path=prov_path, plots=[plot], rows=rows, fits=fits,
+                             headline=headline(rows, fits, cfg), provenance=prov, study=study,
+                             wall_s=wall)

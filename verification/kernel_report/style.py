@@ -1,17 +1,23 @@
-"""Shared look of the kernel-study figures: colours, markers, log axes, legends, PNG output."""
+"""Look of the kernel-study figures: colours and markers per method, kernel line styles,
+reference slopes and legends (log axes and PNG output: :mod:`mlsgalerkin.studies.figures`)."""
 
 from __future__ import annotations
 
-import io
-import logging
 import math
-from pathlib import Path
 
 import numpy as np
 
-from mlsgalerkin.io.files import atomic_write
-
-logger = logging.getLogger(__name__)
+__all__ = [
+    "KERNEL_STYLES",
+    "MARKERS",
+    "METHOD_COLORS",
+    "METHOD_MARKERS",
+    "VALUE_ORDER",
+    "legend",
+    "method_line",
+    "order_guide",
+    "ref_slope",
+]
 
 MARKERS = ["o", "s", "^", "v", "D", "P", "X", "<", ">", "*", "h"]
 METHOD_COLORS = {
@@ -29,56 +35,6 @@ KERNEL_STYLES = {
 METHOD_MARKERS = {"shepard": "o", "mls_linear": "s", "mls_quadratic": "^", "rkpm_linear": "x"}
 #: Expected order in Δx of the value error at fixed h/Δx (gradient: one less).
 VALUE_ORDER = {"shepard": 1, "mls_linear": 2, "rkpm_linear": 2, "mls_quadratic": 3}
-
-
-def save_png(fig, path: Path, compact: bool = False, dpi: int = 110) -> Path:
-    """PNG at ``dpi``; ``compact`` quantises it to a 128-colour palette (about 3x smaller)."""
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi)
-    data = buf.getvalue()
-    if compact:
-        try:
-            from PIL import Image
-
-            im = Image.open(io.BytesIO(data)).convert("RGB")
-            im = im.quantize(colors=128, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
-            out = io.BytesIO()
-            im.save(out, format="PNG", optimize=True)
-            data = out.getvalue()
-        except Exception as exc:  # Pillow missing or too old: keep the plain PNG
-            logger.info("PNG quantisation skipped: %s", exc)
-    atomic_write(path, data)
-    return path
-
-
-def tidy_log_axes(ax) -> None:
-    """Readable log axes: on short ranges (< 1.5 decades) label 1-2-3-5 ticks in plain numbers
-    instead of matplotlib's overlapping minor labels."""
-    from matplotlib.ticker import FuncFormatter, NullFormatter
-
-    for axis, (lo, hi) in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
-        if not (lo > 0 and hi > lo):
-            continue
-        if math.log10(hi / lo) >= 1.5:
-            axis.set_minor_formatter(NullFormatter())
-            continue
-        ticks = [
-            m * 10.0**e
-            for e in range(math.floor(math.log10(lo)) - 1, math.ceil(math.log10(hi)) + 1)
-            for m in (1, 2, 3, 5)
-        ]
-        ticks = [t for t in ticks if lo <= t <= hi]
-        if len(ticks) > 6:
-            ticks = [
-                t for t in ticks if round(t / 10.0 ** math.floor(math.log10(t)), 6) in (1, 2, 5)
-            ]
-        axis.set_ticks(ticks)
-        axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-        axis.set_minor_formatter(NullFormatter())
-        if axis is ax.xaxis:
-            ax.set_xlim(lo, hi)
-        else:
-            ax.set_ylim(lo, hi)
 
 
 def ref_slope(ax, x, slope, label=None, y0=None) -> None:

@@ -1,4 +1,8 @@
-"""The numbers behind the source's claims (a)-(d) and the MLS comparison, from rows and fits."""
+"""The numbers behind the source's claims (a)-(d) and the MLS comparison, from rows and fits.
+
+The key numbers the package reports itself (slopes, 5-neighbour errors, 2D orders) come from
+:mod:`mlsgalerkin.studies.kernels.headline`; everything else the summary states is computed here.
+"""
 
 from __future__ import annotations
 
@@ -8,16 +12,17 @@ from collections import defaultdict
 import numpy as np
 
 from mlsgalerkin.kernels import get_kernel, unnormalised_integral
-from mlsgalerkin.studies.kernels.config import (
+from mlsgalerkin.studies.kernels import (
     CLAIM_FUNCTIONS,
-    FUNCTIONS,
     SMOOTH_FUNCTIONS,
-    U2D_LABEL,
     StudyConfig,
+    fit_lookup,
+    headline,
+    quadrature_offsets,
+    sph_slopes,
 )
-from mlsgalerkin.studies.kernels.fits import fit_lookup
-from mlsgalerkin.studies.kernels.records import select_rows, xy_points
-from mlsgalerkin.studies.kernels.sph import quadrature_offsets
+
+from .rows import select_rows, xy_points
 
 __all__ = ["analyse", "kernel_diagnostics"]
 
@@ -44,51 +49,14 @@ def kernel_diagnostics(kname: str) -> dict:
 def analyse(rows: list[dict], fits: list[dict], cfg: StudyConfig) -> dict:
     """Numbers behind claims (a)-(d) and the MLS comparison."""
     F = fit_lookup(fits)
-    res: dict = {}
     kernels = list(cfg.sph_kernels)
-
-    def beta(approx, k, f, q="error_abs", sweep="h", region="interior", part="sph", layout=None):
-        layout = layout or ("quadrature" if approx == "integral" else "uniform")
-        e = F.get((part, approx, layout, k, f, sweep, region, q))
-        return e["exponent"] if e else math.nan
-
-    res["beta_integral"] = {
-        k: {f.label: beta("integral", k, f.label) for f in FUNCTIONS} for k in kernels
-    }
-    res["beta_particle"] = {
-        k: {f.label: beta("particle", k, f.label) for f in FUNCTIONS} for k in kernels
-    }
-    res["beta_integral_rel"] = {
-        k: {f.label: beta("integral", k, f.label, q="error_rel") for f in FUNCTIONS}
-        for k in kernels
-    }
-    res["alpha_integral"] = {
-        k: {f.label: beta("integral", k, f.label, sweep="n_neighbors") for f in FUNCTIONS}
-        for k in kernels
-    }
-    res["alpha_particle"] = {
-        k: {f.label: beta("particle", k, f.label, sweep="n_particles") for f in FUNCTIONS}
-        for k in kernels
-    }
-
-    # (b) relative error with 5 neighbours at h = 0.1
-    rel5 = {}
-    for k in kernels:
-        rel5[k] = {
-            r["function"]: r["error_rel"]
-            for r in rows
-            if r["part"] == "sph"
-            and r["approximation"] == "integral"
-            and r["kernel"] == k
-            and r["sweep"] == "n_neighbors"
-            and r["n_neighbors"] == 5
-            and r["region"] == "interior"
-        }
-    res["rel_5nb"] = rel5
-    res["worst_rel_5nb"] = {
-        k: max((v.get(f, math.nan) for f in CLAIM_FUNCTIONS), default=math.nan)
-        for k, v in rel5.items()
-    }
+    # slopes of part 1, (b) 5-neighbour errors, 2D orders: the package's key numbers
+    res: dict = headline(rows, fits, cfg)
+    res["beta_particle"] = sph_slopes(fits, kernels, approximation="particle")
+    res["beta_integral_rel"] = sph_slopes(fits, kernels, quantity="error_rel")
+    res["alpha_integral"] = sph_slopes(fits, kernels, sweep="n_neighbors")
+    res["alpha_particle"] = sph_slopes(fits, kernels, approximation="particle",
+                                            sweep="n_particles")
     # smallest N_nb giving < 5 % for F1-F4
     need = {}
     for k in kernels:
@@ -267,27 +235,6 @@ def analyse(rows: list[dict], fits: list[dict], cfg: StudyConfig) -> dict:
         }
     rows2 = [r for r in rows if r["part"] == "mls2d"]
     if rows2:
-        o2 = {}
-        for layout in cfg.layouts_2d:
-            for m in cfg.methods_2d:
-                for k in cfg.kernels_2d:
-                    for region in ("interior", "all"):
-                        pv = F.get(
-                            ("mls2d", m, layout, k, U2D_LABEL, "resolution", region, "error_abs")
-                        )
-                        pg = F.get(
-                            ("mls2d", m, layout, k, U2D_LABEL, "resolution", region, "error_grad")
-                        )
-                        o2[(layout, m, k, region)] = (
-                            pv["exponent"] if pv else math.nan,
-                            pg["exponent"] if pg else math.nan,
-                        )
-        res["orders_2d_all"] = o2
-        res["orders_2d"] = {
-            f"{m} / {k}": o2[("jittered", m, k, "interior")]
-            for m in cfg.methods_2d
-            for k in cfg.kernels_2d
-        }
         n_fin = max(cfg.levels_2d)
         lv2 = {}
         for r in rows2:

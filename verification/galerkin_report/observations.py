@@ -12,15 +12,12 @@ from collections import defaultdict
 
 import numpy as np
 
-from mlsgalerkin.studies.galerkin.plots import KERNEL_LABELS, PROBLEM_LABELS, RULE_LABELS
 from mlsgalerkin.studies.galerkin.runner import PENALTY_BETA
+from mlsgalerkin.studies.galerkin.sweeps import energy_quantity as quantity
 
-__all__ = ["observations", "quantity"]
+from .plots import KERNEL_LABELS, PROBLEM_LABELS, RULE_LABELS
 
-
-def quantity(problem: str) -> tuple[str, str]:
-    """The column and name of the gradient-norm error of a problem (energy for elasticity)."""
-    return ("error_energy", "energy") if problem == "timoshenko" else ("error_h1", "H1")
+__all__ = ["observations"]
 
 
 def _p(problem: str) -> str:

@@ -6,8 +6,9 @@ import math
 
 import numpy as np
 
-from mlsgalerkin.studies.kernels.config import StudyConfig
-from mlsgalerkin.studies.kernels.markdown import fmt_num, md_table
+from mlsgalerkin.studies.kernels import StudyConfig
+
+from ..report_format import fmt_num, md_table
 
 __all__ = ["findings", "meshfree_sections"]
 

@@ -9,52 +9,35 @@
                                stiffness eigenvalue against support radius / spacing.
 ``spectra.png``                the lowest stiffness eigenvalues (no boundary conditions): the gap
                                that justifies the zero-mode threshold.
+
+Log axes and PNG output: :mod:`mlsgalerkin.studies.figures`.
 """
 
 from __future__ import annotations
 
-import io
 import logging
 import math
 from pathlib import Path
 
 import numpy as np
 
-from mlsgalerkin.studies.galerkin.output import atomic_write
-from mlsgalerkin.studies.galerkin.sweeps import observed_order
+from mlsgalerkin.analysis.convergence import observed_order
+from mlsgalerkin.studies.figures import pyplot, save_png, tidy_log_axes
+from mlsgalerkin.studies.galerkin.runner import RULE_LABELS
+from mlsgalerkin.studies.galerkin.sweeps import energy_quantity
 
-__all__ = ["make_plots", "RULE_COLORS", "BASIS_STYLES"]
+__all__ = ["BASIS_STYLES", "KERNEL_LABELS", "PROBLEM_LABELS", "RULE_COLORS", "RULE_LABELS",
+           "make_plots"]
 
 logger = logging.getLogger(__name__)
 
 RULE_COLORS = {"dni": "tab:red", "scni": "tab:blue", "vci": "tab:green"}
 BASIS_STYLES = {"linear": ("-", "o"), "quadratic": ("--", "s")}
-RULE_LABELS = {"dni": "DNI", "scni": "SCNI", "vci": "VCI",
-               "vci_constant": "VCI (constant profile)"}
 KERNEL_LABELS = {"cubic_spline": "cubic spline", "quintic_spline": "quintic spline",
                  "wendland_c2": "Wendland C2"}
 PROBLEM_LABELS = {"poisson_mms": "Poisson MMS", "timoshenko": "Timoshenko cantilever",
                   "poisson_patch": "Poisson patch", "elastic_patch": "elasticity patch"}
 _FLOOR = 1e-16
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _save(fig, path: Path, dpi: int = 110) -> Path:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi)
-    atomic_write(path, buf.getvalue())
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
-    return path
 
 
 def _label(rule: str, basis: str) -> str:
@@ -63,10 +46,6 @@ def _label(rule: str, basis: str) -> str:
 
 def _series(rows, **sel):
     return [r for r in rows if all(r.get(k) == v for k, v in sel.items())]
-
-
-def _energy_key(problem: str) -> tuple[str, str]:
-    return ("error_energy", "energy") if problem == "timoshenko" else ("error_h1", "H1")
 
 
 def _slope_triangle(ax, x0: float, y0: float, slope: float, width: float = 2.0) -> None:
@@ -96,35 +75,9 @@ def _header(fig, title: str, rules, bases,
     return (0.0, 0.0, 1.0, 1.0 - top_in / h)
 
 
-def _tidy_log(ax, axis: str = "y") -> None:
-    """Readable log axis: plain 1-2-5 labels below 1.5 decades, 1-3 below 2.5, else decades."""
-    from matplotlib.ticker import FuncFormatter, NullFormatter, NullLocator
-
-    ax_ = ax.yaxis if axis == "y" else ax.xaxis
-    lo, hi = ax.get_ylim() if axis == "y" else ax.get_xlim()
-    if not (lo > 0 and hi > lo):
-        return
-    decades = math.log10(hi / lo)
-    if decades >= 2.5:
-        ax_.set_minor_formatter(NullFormatter())
-        return
-    mantissas = (1, 2, 5) if decades < 1.5 else (1, 3)
-    ticks = [m * 10.0**e for e in range(math.floor(math.log10(lo)) - 1,
-                                         math.ceil(math.log10(hi)) + 1) for m in mantissas]
-    ticks = [t for t in ticks if lo <= t <= hi]
-    ax_.set_ticks(ticks)
-    ax_.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-    ax_.set_minor_locator(NullLocator())
-    if axis == "y":
-        ax.set_ylim(lo, hi)
-    else:
-        ax.set_xlim(lo, hi)
-
-
 def _tidy_all(fig) -> None:
     for ax in fig.axes:
-        if ax.get_yscale() == "log":
-            _tidy_log(ax, "y")
+        tidy_log_axes(ax, "y")
 
 
 def _spacing_ticks(ax, xs) -> None:
@@ -141,7 +94,7 @@ def _spacing_ticks(ax, xs) -> None:
 
 
 def _convergence_figure(rows, problem: str, rules, bases, out: Path) -> Path | None:
-    plt = _plt()
+    plt = pyplot()
     conv = _series(rows, study="convergence", problem=problem)
     if not conv:
         return None
@@ -149,7 +102,7 @@ def _convergence_figure(rows, problem: str, rules, bases, out: Path) -> Path | N
     for nodes in ("regular", "perturbed"):
         for k in dict.fromkeys(r["kernel"] for r in conv if r["nodes"] == nodes):
             panels.append((k, nodes))
-    qkey, qname = _energy_key(problem)
+    qkey, qname = energy_quantity(problem)
     fig, axes = plt.subplots(len(panels), 2, figsize=(10.5, 3.1 * len(panels) + 0.8),
                              squeeze=False, sharex=True)
     for i, (kernel, nodes) in enumerate(panels):
@@ -191,18 +144,18 @@ def _convergence_figure(rows, problem: str, rules, bases, out: Path) -> Path | N
                    f"right of each panel: least squares over all levels)", rules, bases)
     _tidy_all(fig)
     fig.tight_layout(rect=(rect[0], rect[1], 0.95, rect[3]))
-    return _save(fig, out / f"convergence_{problem}.png")
+    return save_png(fig, out / f"convergence_{problem}.png")
 
 
 def _work_precision(rows, problems, rules, bases, kernel: str, out: Path) -> Path | None:
-    plt = _plt()
+    plt = pyplot()
     conv = _series(rows, study="convergence", kernel=kernel, nodes="regular")
     problems = [p for p in problems if _series(conv, problem=p)]
     if not problems:
         return None
     fig, axes = plt.subplots(2, len(problems), figsize=(5.4 * len(problems), 8.2), squeeze=False)
     for j, problem in enumerate(problems):
-        qkey, qname = _energy_key(problem)
+        qkey, qname = energy_quantity(problem)
         for i, (key, name) in enumerate((("error_l2", "L2"), (qkey, qname))):
             ax = axes[i, j]
             for rule in rules:
@@ -229,11 +182,11 @@ def _work_precision(rows, problems, rules, bases, kernel: str, out: Path) -> Pat
                    f"regular nodes; numbers: node count of the finest level)", rules, bases)
     _tidy_all(fig)
     fig.tight_layout(rect=rect)
-    return _save(fig, out / "work_precision.png")
+    return save_png(fig, out / "work_precision.png")
 
 
 def _wall_split(rows, problems, rules, bases, kernel: str, out: Path) -> Path | None:
-    plt = _plt()
+    plt = pyplot()
     conv = _series(rows, study="convergence", kernel=kernel, nodes="regular")
     problems = [p for p in problems if _series(conv, problem=p)]
     if not problems:
@@ -268,11 +221,11 @@ def _wall_split(rows, problems, rules, bases, kernel: str, out: Path) -> Path | 
     axes[0, 0].legend(fontsize=7.5)
     _tidy_all(fig)
     fig.tight_layout()
-    return _save(fig, out / "wall_split.png")
+    return save_png(fig, out / "wall_split.png")
 
 
 def _h_sweep_figure(rows, problem: str, rules, bases, tol: float, out: Path) -> Path | None:
-    plt = _plt()
+    plt = pyplot()
     sw = _series(rows, study="h_sweep", problem=problem)
     if not sw:
         return None
@@ -280,7 +233,7 @@ def _h_sweep_figure(rows, problem: str, rules, bases, tol: float, out: Path) -> 
     for nodes in ("regular", "perturbed"):
         for k in dict.fromkeys(r["kernel"] for r in sw if r["nodes"] == nodes):
             panels.append((k, nodes))
-    qkey, qname = _energy_key(problem)
+    qkey, qname = energy_quantity(problem)
     fig, axes = plt.subplots(len(panels), 4, figsize=(16, 2.9 * len(panels) + 1.0), squeeze=False,
                              sharex=True)
     n_max = 0
@@ -340,13 +293,13 @@ def _h_sweep_figure(rows, problem: str, rules, bases, tol: float, out: Path) -> 
                    f"column symmetric rules only)", rules, bases)
     _tidy_all(fig)
     fig.tight_layout(rect=rect)
-    return _save(fig, out / f"h_sweep_{problem}.png")
+    return save_png(fig, out / f"h_sweep_{problem}.png")
 
 
-def _spectra_figure(spectra: dict, problems, rules, bases, ratio_of, kernel: str, tol: float,
-                    out: Path, n_show: int = 30) -> Path | None:
-    plt = _plt()
-    problems = [p for p in problems if any(s.problem == p for s in spectra)]
+def _spectra_figure(sweep_rows: list[dict], problems, rules, bases, ratio_of, kernel: str,
+                    tol: float, out: Path, n_show: int = 30) -> Path | None:
+    plt = pyplot()
+    problems = [p for p in problems if any(r["problem"] == p for r in sweep_rows)]
     if not problems:
         return None
     fig, axes = plt.subplots(1, len(problems), figsize=(5.8 * len(problems), 4.4), squeeze=False)
@@ -355,13 +308,13 @@ def _spectra_figure(spectra: dict, problems, rules, bases, ratio_of, kernel: str
         for rule in rules:
             for basis in bases:
                 want = ratio_of[basis]
-                match = [(s, v) for s, v in spectra.items()
-                         if s.problem == problem and s.rule == rule
-                         and s.basis == basis and s.kernel == kernel and s.nodes == "regular"
-                         and abs(s.support_ratio - want) < 1e-9]
+                match = [r["eigenvalues"] for r in sweep_rows
+                         if r["problem"] == problem and r["rule"] == rule
+                         and r["basis"] == basis and r["kernel"] == kernel
+                         and r["nodes"] == "regular" and abs(r["support_ratio"] - want) < 1e-9]
                 if not match:
                     continue
-                spec, vals = match[0]
+                vals = match[0]
                 ls, mk = BASIS_STYLES[basis]
                 k = np.arange(1, min(n_show, vals.size) + 1)
                 ax.semilogy(k, np.maximum(vals[: k.size], _FLOOR), ls=ls, marker=mk, ms=3,
@@ -381,11 +334,12 @@ def _spectra_figure(spectra: dict, problems, rules, bases, ratio_of, kernel: str
                    rules, bases)
     _tidy_all(fig)
     fig.tight_layout(rect=rect)
-    return _save(fig, out / "spectra.png")
+    return save_png(fig, out / "spectra.png")
 
 
-def make_plots(rows: list[dict], spectra: dict, cfg, out: Path) -> list[Path]:
-    """Every figure of the study; returns the paths written."""
+def make_plots(rows: list[dict], cfg, out: Path) -> list[Path]:
+    """Every figure of the study; returns the paths written. The spectra come from the
+    ``eigenvalues`` of the h-sweep rows."""
     rules = [r for r in cfg.rules if any(x["rule"] == r for x in rows)]
     bases = list(cfg.bases)
     problems = list(cfg.levels)
@@ -397,13 +351,14 @@ def make_plots(rows: list[dict], spectra: dict, cfg, out: Path) -> list[Path]:
     paths.append(_wall_split(rows, problems, rules, bases, kernel, out))
     for problem in cfg.sweep_spacing:
         paths.append(_h_sweep_figure(rows, problem, rules, bases, cfg.eig_tol, out))
+    sweep_rows = [r for r in rows if r["study"] == "h_sweep" and "eigenvalues" in r]
     ratio_of = dict(cfg.support_ratio)
-    avail = {s.support_ratio for s in spectra}
+    avail = {r["support_ratio"] for r in sweep_rows}
     for b, r in list(ratio_of.items()):  # fall back to the closest swept ratio
         if avail and r not in avail:
             ratio_of[b] = min(avail, key=lambda a: abs(a - r))
-    paths.append(_spectra_figure(spectra, list(cfg.sweep_spacing), rules, bases, ratio_of, kernel,
-                                 cfg.eig_tol, out))
+    paths.append(_spectra_figure(sweep_rows, list(cfg.sweep_spacing), rules, bases, ratio_of,
+                                 kernel, cfg.eig_tol, out))
     out_paths = [p for p in paths if p is not None]
     logger.info("%d figures written", len(out_paths))
     return out_paths

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import math
 
+from mlsgalerkin.analysis.convergence import ROUNDOFF
 from mlsgalerkin.kernels import get_kernel, unnormalised_integral
-from mlsgalerkin.studies.kernels.config import FUNCTIONS, ROUNDOFF, SMOOTH_FUNCTIONS, StudyConfig
-from mlsgalerkin.studies.kernels.markdown import fmt_num, fmt_pct, md_table
-from mlsgalerkin.studies.kernels.report_meshfree import meshfree_sections
+from mlsgalerkin.studies.kernels import FUNCTIONS, SMOOTH_FUNCTIONS, StudyConfig
+
+from ..report_format import fmt_num, fmt_pct, md_table
+from .summary_meshfree import meshfree_sections
 
 __all__ = ["summary_text"]
 
@@ -29,11 +31,11 @@ def summary_text(res: dict, cfg: StudyConfig, prov: dict, files: dict[str, str])
                 ["date (UTC)", prov["date_utc"]],
                 ["machine", f"{prov['machine']['platform']}, {prov['machine']['cpu_count']} CPUs"],
                 ["python / numpy / numba", f"{prov['python']} / {prov['numpy']} / {prov['numba']}"],
-                [
-                    "wall time",
-                    f"{prov.get('wall_s', math.nan):.1f} s "
-                    f"(JIT warm-up {prov.get('jit_warmup_s', 0):.1f} s)",
-                ],
+                ["scheduler", f"{prov.get('scheduler', '—')}; numba threads per worker "
+                              f"{prov.get('numba_threads', '—')}"],
+                ["environment", ", ".join(f"{k}={v}" for k, v in
+                                          prov.get("environment", {}).items()) or "—"],
+                ["wall time", f"{prov.get('wall_s', math.nan):.1f} s"],
             ],
         )
     )
@@ -60,8 +62,10 @@ def summary_text(res: dict, cfg: StudyConfig, prov: dict, files: dict[str, str])
         f"< {ROUNDOFF:g} (round-off). tan x is fitted and recorded but excluded from the claims.\n"
         f"* **Wall time**: `time.perf_counter` around building the approximation (neighbours, "
         f"weights/shape functions) plus applying it to one function; calls shorter than "
-        f"{cfg.min_time * 1e3:g} ms are repeated and averaged; numba code is compiled before "
-        f"any timing.\n"
+        f"{cfg.min_time * 1e3:g} ms are repeated in groups lasting about that long and the best "
+        f"time per call is kept; numba code is compiled (or loaded from its cache) in every "
+        f"worker before any timing; the `worker` column names the process that measured the "
+        f"row.\n"
     )
 
     # slopes tables
@@ -290,9 +294,4 @@ def summary_text(res: dict, cfg: StudyConfig, prov: dict, files: dict[str, str])
         L.append("## What MLS changes (measured)\n")
         L.extend(f"* {s}" for s in res["findings"])
         L.append("")
-    if res.get("part2_skipped"):
-        L.append(
-            "## Part 2 skipped\n\n`mlsgalerkin.shape_functions` was not importable; only the "
-            "SPH part ran.\n"
-        )
     return "\n".join(L) + "\n"

@@ -6,14 +6,17 @@ from pathlib import Path
 
 import numpy as np
 
-from mlsgalerkin.studies.kernels.config import (
+from mlsgalerkin.studies.figures import PLOT_FLOOR, pyplot, save_png, tidy_log_axes
+from mlsgalerkin.studies.kernels import (
     FUNCTIONS,
     FUNCTIONS_BY_LABEL,
     SMOOTH_FUNCTIONS,
     U2D_TEXT,
     StudyConfig,
 )
-from mlsgalerkin.studies.kernels.plot_style import (
+
+from .rows import select_rows, xy_points
+from .style import (
     KERNEL_STYLES,
     MARKERS,
     METHOD_COLORS,
@@ -22,20 +25,14 @@ from mlsgalerkin.studies.kernels.plot_style import (
     method_line,
     order_guide,
     ref_slope,
-    save_png,
-    tidy_log_axes,
 )
-from mlsgalerkin.studies.kernels.records import PLOT_FLOOR, select_rows, xy_points
 
 __all__ = ["plots_shape_functions", "plots_sph"]
 
 
 def plots_sph(rows: list[dict], cfg: StudyConfig, out: Path) -> list[Path]:
     """Part-1 figures: error against h, and against neighbour/particle count."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
+    plt = pyplot()
     from matplotlib.lines import Line2D
 
     paths: list[Path] = []
@@ -76,7 +73,6 @@ def plots_sph(rows: list[dict], cfg: StudyConfig, out: Path) -> list[Path]:
         fig.suptitle(title)
         fig.subplots_adjust(left=0.05, right=0.99, bottom=0.12, top=0.88, wspace=0.3, hspace=0.42)
         p = save_png(fig, out / fname, compact=not cfg.quick)
-        plt.close(fig)
         return p
 
     def slope2(ax, fn):
@@ -135,10 +131,7 @@ def plots_sph(rows: list[dict], cfg: StudyConfig, out: Path) -> list[Path]:
 
 def plots_shape_functions(rows: list[dict], cfg: StudyConfig, out: Path) -> list[Path]:
     """Part-2 figures: 1D errors, 2D errors against h/Δx and Δx, work-precision."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     paths: list[Path] = []
     plt.rcParams.update({"font.size": 8, "axes.titlesize": 9})
@@ -188,7 +181,6 @@ def plots_shape_functions(rows: list[dict], cfg: StudyConfig, out: Path) -> list
         )
         fig.subplots_adjust(left=0.07, right=0.99, bottom=0.09, top=0.93, wspace=0.25, hspace=0.4)
         paths.append(save_png(fig, out / "mls1d_errors.png", compact=not cfg.quick))
-        plt.close(fig)
 
     rows2 = [r for r in rows if r["part"] == "mls2d"]
     kstyle2 = {k: KERNEL_STYLES.get(k, "-") for k in cfg.kernels_2d}
@@ -254,7 +246,6 @@ def plots_shape_functions(rows: list[dict], cfg: StudyConfig, out: Path) -> list
                 left=0.06, right=0.99, bottom=0.14, top=0.9, wspace=0.28, hspace=0.45
             )
             paths.append(save_png(fig, out / fname, compact=not cfg.quick))
-            plt.close(fig)
 
     # work-precision: error against wall time along the refinement sweeps
     if mls_rows or rows2:
@@ -316,5 +307,4 @@ def plots_shape_functions(rows: list[dict], cfg: StudyConfig, out: Path) -> list
         )
         fig.subplots_adjust(left=0.08, right=0.99, bottom=0.11, top=0.9, wspace=0.3, hspace=0.38)
         paths.append(save_png(fig, out / "work_precision.png", compact=not cfg.quick))
-        plt.close(fig)
     return paths

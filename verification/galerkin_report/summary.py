@@ -1,4 +1,4 @@
-"""``summary.md`` of the Galerkin study and the console report: tables and measured observations.
+"""``summary.md`` of the Galerkin study: tables and measured observations.
 
 Everything here is computed from the rows; nothing is hard-coded from expectations.
 """
@@ -7,38 +7,20 @@ from __future__ import annotations
 
 import math
 from collections import defaultdict
-from dataclasses import dataclass, field
-from pathlib import Path
 
-from mlsgalerkin.studies.galerkin.observations import observations
-from mlsgalerkin.studies.galerkin.observations import quantity as _quantity
-from mlsgalerkin.studies.galerkin.plots import KERNEL_LABELS, PROBLEM_LABELS, RULE_LABELS
 from mlsgalerkin.studies.galerkin.runner import NITSCHE_BETA, PENALTY_BETA, VCI_CORRECTION
+from mlsgalerkin.studies.galerkin.sweeps import energy_quantity as _quantity
 
-__all__ = ["GalerkinStudyResult", "summary_markdown", "patch_table", "orders_table",
-           "time_to_error", "TARGETS"]
+from ..report_format import fmt_num as _g
+from ..report_format import md_table as _table
+from .observations import observations
+from .plots import KERNEL_LABELS, PROBLEM_LABELS, RULE_LABELS
+
+__all__ = ["TARGETS", "orders_table", "patch_table", "summary_markdown", "time_to_error"]
 
 #: Relative errors whose cost (wall time to reach them) the summary tabulates.
 TARGETS = {"poisson_mms": {"error_l2": 1e-3, "error_h1": 1e-2},
            "timoshenko": {"error_l2": 3e-3, "error_energy": 1e-2}}
-
-
-def _g(v, fmt: str = ".2f") -> str:
-    if v is None:
-        return "—"
-    try:
-        v = float(v)
-    except (TypeError, ValueError):
-        return str(v)
-    if not math.isfinite(v):
-        return "—"
-    return format(v, fmt)
-
-
-def _table(header: list[str], body: list[list[str]]) -> str:
-    lines = ["| " + " | ".join(header) + " |", "|" + "|".join(["---"] * len(header)) + "|"]
-    lines += ["| " + " | ".join(r) + " |" for r in body]
-    return "\n".join(lines)
 
 
 def _rule(r: str) -> str:
@@ -229,8 +211,10 @@ def summary_markdown(rows: list[dict], orders: list[dict], cfg, prov: dict,
     L.append(f"Mode **{prov['mode']}**, `{prov['command']}`; "
              f"mlsgalerkin {prov['mlsgalerkin_version']}, "
              f"commit `{prov['git_commit']}`, {prov['date_utc']}; {prov['machine']['platform']}, "
-             f"{prov['machine']['cpu_count']} CPUs; numba threads {prov.get('numba_threads')}; "
-             f"total wall time {prov.get('wall_s', math.nan):.0f} s. "
+             f"{prov['machine']['cpu_count']} CPUs; {prov.get('scheduler', 'serial')}, numba "
+             f"threads {prov.get('numba_threads')} per worker; environment "
+             + (", ".join(f"{k}={v}" for k, v in prov.get("environment", {}).items()) or "—")
+             + f"; total wall time {prov.get('wall_s', math.nan):.0f} s. "
              f"See `{files.get('provenance')}`.\n")
     L.append("## Set-up\n")
     L.append("* **Problems** (`mlsgalerkin/studies/galerkin/problems.py`): linear patch tests "
@@ -246,7 +230,7 @@ def summary_markdown(rows: list[dict], orders: list[dict], cfg, prov: dict,
              "the clipped Voronoi cells, 2 Gauss points per cell edge); VCI (beyond the sources: "
              "DNI trial functions, test gradients corrected so that the linear integration "
              f"constraint holds, correction profile `{VCI_CORRECTION}`, Petrov–Galerkin, "
-             "`mlsgalerkin/studies/galerkin/vci.py`; the constant profile is measured as an "
+             "`mlsgalerkin/integration/vci.py`; the constant profile is measured as an "
              "ablation, `vci_constant`, linear basis and first kernel only).")
     L.append(f"* **Boundary conditions**: symmetric Nitsche, β = {NITSCHE_BETA:g}, modulus 1 "
              "(Poisson) or E (elasticity), flux from the rule's gradient at the nearest "
@@ -267,9 +251,9 @@ def summary_markdown(rows: list[dict], orders: list[dict], cfg, prov: dict,
     L.append("* **Wall time** per point = shape functions (Voronoi cells, rule, VCI correction, "
              "boundary quadratures) + assembly (stiffness, loads, Nitsche/traction terms) + solve "
              "(SuperLU, MMD_ATA ordering); the error evaluation is not counted. Single-threaded "
-             f"numba; runs under {cfg.min_time:g} s are repeated (up to {cfg.max_repeats}×) "
-             "and the "
-             "fastest time per phase is kept.\n")
+             f"numba and BLAS in every worker; runs under {cfg.min_time:g} s are repeated (up to "
+             f"{cfg.max_repeats}×) and the fastest time per phase is kept; the `worker` column "
+             "names the process that measured the row.\n")
 
     L.append("## Patch tests (relative errors)\n")
     ptab, agg = patch_table(rows)
@@ -347,51 +331,3 @@ def summary_markdown(rows: list[dict], orders: list[dict], cfg, prov: dict,
     L.append("## Files\n")
     L.extend(f"* `{v}`" for v in files.values())
     return "\n".join(L) + "\n"
-
-
-# --------------------------------------------------------------------------------------
-# result object
-# --------------------------------------------------------------------------------------
-
-
-@dataclass
-class GalerkinStudyResult:
-    """Paths, rows and orders of one run; :meth:`report` summarises them for the console."""
-
-    out: Path
-    quick: bool
-    csv_path: Path
-    orders_path: Path
-    summary_path: Path
-    provenance_path: Path
-    plots: list[Path]
-    rows: list[dict] = field(repr=False)
-    orders: list[dict] = field(repr=False)
-    wall_s: float = math.nan
-
-    def report(self) -> str:
-        lines = [f"Galerkin study ({'quick' if self.quick else 'default'}) written to {self.out} "
-                 f"in {self.wall_s:.1f} s",
-                 f"  table     : {self.csv_path} ({len(self.rows)} rows)",
-                 f"  orders    : {self.orders_path}",
-                 f"  summary   : {self.summary_path}",
-                 f"  provenance: {self.provenance_path}",
-                 "  plots     : " + ", ".join(p.name for p in self.plots), ""]
-        _, agg = patch_table(self.rows)
-        lines.append("patch tests, largest relative L2 error (Nitsche):")
-        for rule in dict.fromkeys(k[1] for k in agg):
-            vals = {n: max((a["max_l2"] for k, a in agg.items()
-                            if k[1] == rule and k[2] == n and k[3] == "nitsche"), default=math.nan)
-                    for n in ("regular", "perturbed")}
-            lines.append(f"  {_rule(rule):<5} regular {vals['regular']:.1e}   perturbed "
-                         f"{vals['perturbed']:.1e}")
-        lines.append("observed orders (least squares over all levels, regular nodes): "
-                     "L2 / H1 or energy")
-        for o in self.orders:
-            if o["nodes"] != "regular":
-                continue
-            q, _ = _quantity(o["problem"])
-            key = q.removeprefix("error_")
-            lines.append(f"  {o['problem']:<12} {_rule(o['rule']):<5} {o['basis']:<9} "
-                         f"{o['kernel']:<15} {o['order_l2']:5.2f} / {o[f'order_{key}']:5.2f}")
-        return "\n".join(lines)
