@@ -25,7 +25,9 @@ reflection away from the probe until ``t ≈ (2 L − x_p)/c_g``. The walls are 
 pressure of the piston's wall particles uses ``g − a_piston``. The gauge stands two depths from
 the paddle, where the first evanescent mode has decayed to ``e^{-2π}`` and the wave has lost
 little to the artificial viscosity, which acts as a kinematic viscosity ``ν ≈ α h c0 / 8``
-(reported as ``numerical_viscosity_m2_s``; it damps the wave amplitude at the rate ``2νk²``).
+(reported as ``numerical_viscosity_m2_s``; it damps the wave amplitude at the rate ``2νk²``,
+Lamb 1932, so by about ``1 − exp(−2νk² x_p/c_g)`` between paddle and gauge:
+``viscous_decay_to_gauge``; the wave Reynolds number ``ω/(νk²)`` is reported too).
 With ``α = 0.02`` a lattice mode of the particles grew over the run (the measurements are in
 ``verification/README.md``); ``α = 0.1`` is the default.
 """
@@ -185,8 +187,14 @@ def analyse(result, p: Parameters) -> dict:
         "mean_level_m": float(coef[0]), "second_harmonic_over_first": math.hypot(coef[3], coef[4]) / (0.5 * H),
         "fit_rms_residual_m": float(np.sqrt(np.mean(resid**2))),
         "crest_to_trough_m": float(eta[sel].max() - eta[sel].min()),
-        "numerical_viscosity_m2_s": p.alpha * p.h_factor * p.dx * p.c0_factor * math.sqrt(p.g * p.depth) / 8.0,
     })
+    # the artificial viscosity acts as nu = alpha h c0 / 8; a progressive wave loses amplitude at the
+    # rate 2 nu k^2 (Lamb 1932, §348), so between the paddle and the gauge it decays by about
+    # 1 - exp(-2 nu k^2 x_p / c_g); the wave Reynolds number is omega / (nu k^2)
+    nu = p.alpha * p.h_factor * p.dx * p.c0_factor * math.sqrt(p.g * p.depth) / 8.0
+    out["numerical_viscosity_m2_s"] = nu
+    out["wave_reynolds_number"] = omega / (nu * k * k)
+    out["viscous_decay_to_gauge"] = 1.0 - math.exp(-2.0 * nu * k * k * p.probe_x / out["group_velocity_m_s"])
     out["headline"] = (f"wave height {1e3 * H:.2f} mm at x = {p.probe_x:g} m vs linear wave-maker theory "
                        f"{1e3 * H_theory:.2f} mm (H/S {H / p.stroke:.3f} vs {ratio_theory:.3f}, "
                        f"{100 * out['relative_error']:+.1f} %), kd = {kd:.2f}, {p.depth / p.dx:.0f} rows per depth")

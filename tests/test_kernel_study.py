@@ -1,4 +1,4 @@
-"""Kernel accuracy study: its helpers, and the seed's pass criteria (digest §9.9) in quick mode.
+"""Kernel accuracy study: its helpers, and the pass criteria of Xing's (2019) study in quick mode.
 
 The measurements are the package's (:mod:`mlsgalerkin.studies.kernels`); the report (claims,
 ``summary.md``, figures) is ``verification/kernel_report``, imported from the repository root.

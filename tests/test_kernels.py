@@ -1,7 +1,7 @@
 """Kernel (window) functions: normalisation, derivatives, support, smoothness, registry.
 
 Every kernel is ``W(r, h) = alpha_d / h**d * f(q)``, ``q = r / h`` (see ``mlsgalerkin.kernels``).
-Reference values are the seed digest §5.2-5.3.
+Reference values are the corrected constants of Xing (2019) and Liu & Liu (2003).
 """
 
 from __future__ import annotations
@@ -25,8 +25,8 @@ BREAKS = (0.5, 1.0, 1.5, 2.0, 2.5)
 #: Interior joins of the piecewise-polynomial splines.
 JOINS = {"cubic_spline": (1.0,), "quartic_spline": (0.5, 1.5), "quintic_spline": (1.0, 2.0)}
 
-#: Support (in units of h) and constants (alpha_1, alpha_2, alpha_3), hard-coded from the seed
-#: digest §5.3 (with the digest's corrections: Lucy 3D carries pi, quintic 3D is exactly
+#: Support (in units of h) and constants (alpha_1, alpha_2, alpha_3), hard-coded from the corrected
+#: table of Xing (2019) and Liu & Liu (2003) (corrections: Lucy 3D carries pi, quintic 3D is exactly
 #: 1/(120 pi)) and, for Wendland, the Dehnen & Aly (2012) values with support q < 2.
 EXPECTED = {
     "quadratic": (1.0, (3 / 4, 2 / PI, 15 / (8 * PI))),
@@ -149,7 +149,7 @@ def test_truncated_gaussian_family(name, dim):
 
 @pytest.mark.parametrize("support", [2.0, 3.0])
 def test_gaussian_with_support(support, dim):
-    """Digest §5.2(d): S0's truncation at q = 2 loses ~0.5 % (1D) to ~5 % (3D) of the mass."""
+    """Xing (2019): the truncation at q = 2 loses ~0.5 % (1D) to ~5 % (3D) of the mass."""
     g = KERNELS["gaussian"].with_support(support)
     assert g.support == support
     mass = float(gammainc(dim / 2.0, support**2))
@@ -285,7 +285,7 @@ def test_nonnegative_flag(kernel, dim):
     f = kernel.shape(q, dim)
     assert (f.min() >= 0.0) == kernel.nonnegative, f.min()
     if kernel.nonnegative:
-        # the digest's "decay" property: nonnegative kernels never increase with distance
+        # the "decay" property: nonnegative kernels never increase with distance
         assert np.all(kernel.shape_derivative(q, dim) <= 0.0)
     if kernel.name == "new_quartic":
         # documented dip: >= -0.24 % of f(0) (exactly -0.2375 %, at q = 1.8 where f' = 0), for
@@ -302,7 +302,7 @@ def test_nonnegative_flag(kernel, dim):
 # --------------------------------------------------------------------------------------
 
 
-def test_registry_matches_digest_table():
+def test_registry_matches_the_corrected_table():
     assert set(KERNELS) == set(EXPECTED)
     assert kernel_names() == list(KERNELS)
     assert len({k.kernel_id for k in KERNELS.values()}) == len(KERNELS)

@@ -1,4 +1,4 @@
-"""Kernel accuracy study (seed digest §6, §9.9) and its MLS/RKPM/Shepard extension.
+"""Kernel accuracy study (Xing 2019, §12.2.3) and its MLS/RKPM/Shepard extension.
 
 The measurements run on the study engine (:func:`mlsgalerkin.studies.kernels.run_kernel_study`,
 a local Dask cluster by default); this script adds the report (``summary.md`` with the source's

@@ -18,7 +18,7 @@ def summary_text(res: dict, cfg: StudyConfig, prov: dict, files: dict[str, str])
     """``summary.md``: provenance, set-up, fitted slopes, the claims measured, part 2."""
     kernels = list(cfg.sph_kernels)
     L: list[str] = []
-    L.append("# Kernel accuracy study (seed digest §6, §9.9) and meshfree extension\n")
+    L.append("# Kernel accuracy study (Xing 2019, §12.2.3) and meshfree extension\n")
     L.append("## Provenance\n")
     L.append(
         md_table(
@@ -54,9 +54,9 @@ def summary_text(res: dict, cfg: StudyConfig, prov: dict, files: dict[str, str])
         f"are averaged.\n"
         f"* **Particle approximation**: Σ F_b W_ab / Σ W_ab at N equally spaced particles "
         f"(both ends included, Δx = 2/(N−1)), evaluated at the particles.\n"
-        f"* **Errors**: RMS (seed eq. 12.67), absolute and relative (÷ RMS of F over the same "
+        f"* **Errors**: RMS (Xing 2019, eq. 12.67), absolute and relative (÷ RMS of F over the same "
         f"points), over 'interior' points (support [x−κh, x+κh] inside the domain) and 'all' "
-        f"points. **Pass criteria and slopes use the interior absolute error** (the seed's ε); "
+        f"points. **Pass criteria and slopes use the interior absolute error** (Xing's ε); "
         f"the 5 % criterion uses the interior relative error.\n"
         f"* **Fits**: least squares in log-log, ε = B h^β and ε = A N^α, skipping errors "
         f"< {ROUNDOFF:g} (round-off). tan x is fitted and recorded but excluded from the claims.\n"

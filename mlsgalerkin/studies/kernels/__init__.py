@@ -1,4 +1,4 @@
-r"""Kernel accuracy study (seed digest §6 and §9.9) and its meshfree extension.
+r"""Kernel accuracy study (Xing 2019, §12.2.3) and its meshfree extension.
 
 Part 1 reproduces the source chapter's SPH study; part 2 asks the same questions of the MLS,
 RKPM and Shepard shape functions of :func:`mlsgalerkin.shape_functions`.
@@ -23,7 +23,7 @@ Part 2 — shape functions
     a jittered lattice and on uniformly random nodes in the unit square, value and gradient
     errors against ``h/Δx`` and against ``Δx``.
 
-Errors are RMS (seed eq. 12.67) over two regions: ``interior`` (evaluation points whose
+Errors are RMS (Xing 2019, eq. 12.67) over two regions: ``interior`` (evaluation points whose
 support ``[x - κh, x + κh]`` lies inside the domain) and ``all``. Every measured row records its
 wall time ``wall_s`` (``time.perf_counter`` around building the approximation plus applying it to
 one function; short calls are repeated, best time kept) and its neighbour count; the grid runs on

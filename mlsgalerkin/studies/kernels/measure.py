@@ -13,7 +13,7 @@ __all__ = ["interior_mask", "region_rows", "rms_error"]
 def rms_error(
     approx: np.ndarray, exact: np.ndarray, mask: np.ndarray | None = None
 ) -> tuple[float, float]:
-    """Absolute and relative RMS error (seed eq. 12.67); relative = absolute / RMS(exact).
+    """Absolute and relative RMS error (Xing 2019, eq. 12.67); relative = absolute / RMS(exact).
 
     For vector data ``(n, dim)`` the pointwise error is the Euclidean norm.
     """
