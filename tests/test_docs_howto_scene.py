@@ -13,56 +13,12 @@ threads only add overhead at that size and slow down badly on a loaded machine.
 
 from __future__ import annotations
 
-import contextlib
-import io
-import re
 import shlex
 from pathlib import Path
 
-import pytest
+from howto_pages import missing_links, run_python, steps
 
 HOWTO = Path(__file__).resolve().parents[1] / "docs" / "howto" / "write_a_scene_and_an_effect.md"
-FENCE = re.compile(r"^```(\w*)([^\n]*)\n(.*?)^```[ \t]*$", flags=re.S | re.M)
-
-
-@pytest.fixture
-def one_numba_thread():
-    import numba
-
-    before = numba.get_num_threads()
-    numba.set_num_threads(1)
-    try:
-        yield
-    finally:
-        numba.set_num_threads(before)
-
-
-def fenced_blocks(text: str) -> list[tuple[str, str, str, int, int]]:
-    """``(language, info, code, start, end)`` of every fenced block, in order (``info`` is what
-    follows the language on the opening line, e.g. ``file=my_case.py``)."""
-    return [(m.group(1), m.group(2).strip(), m.group(3), m.start(), m.end()) for m in FENCE.finditer(text)]
-
-
-def steps(text: str) -> list[tuple[str, str, str | None, int]]:
-    """The page as a reader follows it: ``(kind, payload, claimed output, line)`` with kind
-    ``"python"`` (run it), ``"file"`` (payload ``name\ncode``: save it) or ``"command"`` (an
-    ``mlsgalerkin ...`` line of a bash block)."""
-    blocks = fenced_blocks(text)
-    out = []
-    for k, (lang, info, code, start, end) in enumerate(blocks):
-        line = text.count("\n", 0, start) + 1
-        if lang == "python" and info.startswith("file="):
-            out.append(("file", info[len("file="):] + "\n" + code, None, line))
-        elif lang == "python":
-            claimed = None
-            if k + 1 < len(blocks):
-                nlang, _, ncode, nstart, _ = blocks[k + 1]
-                if nlang == "text" and text[end:nstart].strip() == "":
-                    claimed = ncode
-            out.append(("python", code, claimed, line))
-        elif lang == "bash":
-            out += [("command", c.strip(), None, line) for c in code.splitlines() if c.strip().startswith("mlsgalerkin ")]
-    return out
 
 
 def test_howto_runs_as_written(tmp_path, monkeypatch, capsys, one_numba_thread):
@@ -96,14 +52,10 @@ def test_howto_runs_as_written(tmp_path, monkeypatch, capsys, one_numba_thread):
             if payload == "mlsgalerkin problems":
                 assert "hydrostatic" in out and "wave_maker" in out
             continue
-        buf = io.StringIO()
-        with contextlib.redirect_stdout(buf):
-            # dont_inherit: run as pasted, without this file's ``from __future__ import annotations``
-            exec(compile(payload, f"{HOWTO.name}:{line}", "exec", dont_inherit=True), namespace)
+        printed = run_python(payload, namespace, f"{HOWTO.name}:{line}")
         if claimed is not None:
-            printed = buf.getvalue().rstrip("\n").splitlines()
-            expected = claimed.rstrip("\n").splitlines()
-            assert printed == expected, f"block at line {line} of {HOWTO.name} printed:\n{buf.getvalue()}"
+            assert printed.rstrip("\n").splitlines() == claimed.rstrip("\n").splitlines(), (
+                f"block at line {line} of {HOWTO.name} printed:\n{printed}")
 
 
 def test_relative_links_of_the_fluid_pages_resolve():
@@ -114,8 +66,5 @@ def test_relative_links_of_the_fluid_pages_resolve():
     index = (docs / "index.md").read_text(encoding="utf-8")
     assert "(theory/galerkin_fluid.md)" in index and "(howto/write_a_scene_and_an_effect.md)" in index
     for page in (HOWTO, theory):
-        links = re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", page.read_text(encoding="utf-8"))
-        relative = [ln for ln in links if "://" not in ln]
-        assert relative, page.name
-        for link in relative:
-            assert (page.parent / link).resolve().exists(), f"{page.name} links to missing {link}"
+        assert "](" in page.read_text(encoding="utf-8"), page.name
+        assert not missing_links(page), f"{page.name} links to missing {missing_links(page)}"
