@@ -41,8 +41,10 @@ class Body:
     one solver class in a scene are handed to one instance of that class.
     """
 
-    #: The :class:`Solver` subclass that advances bodies of this kind.
-    solver: ClassVar[type["Solver"]]
+    #: The :class:`Solver` subclass that advances bodies of this kind, or its import path
+    #: ``"package.module:Class"`` (resolved by the scene; lets a body module avoid importing its
+    #: solver module).
+    solver: ClassVar[type["Solver"] | str]
     name: str
 
     @property
