@@ -62,12 +62,16 @@ def _cmd_study_galerkin(args: argparse.Namespace) -> int:
 
 
 def _parse_sets(items: list[str]) -> dict[str, str]:
+    """``--set NAME=VALUE`` items as a dict; a malformed or repeated item is a ValueError."""
     out = {}
     for item in items:
-        if "=" not in item:
-            raise SystemExit(f"--set expects NAME=VALUE, got {item!r}")
-        k, v = item.split("=", 1)
-        out[k.strip().replace("-", "_")] = v.strip()
+        k, sep, v = item.partition("=")
+        k = k.strip().replace("-", "_")
+        if not sep or not k:
+            raise ValueError(f"--set expects NAME=VALUE, got {item!r}")
+        if k in out:
+            raise ValueError(f"--set {k} is given twice ({out[k]!r} and {v.strip()!r}); give it once")
+        out[k] = v.strip()
     return out
 
 
@@ -85,33 +89,97 @@ def _cmd_problems(args: argparse.Namespace) -> int:
     return 0
 
 
+def _positive_seconds(text: str) -> float:
+    """An argparse type: a finite number of seconds > 0."""
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text!r}: give a positive, finite number of seconds")
+    return value
+
+
+def _positive_count(text: str) -> int:
+    """An argparse type: a whole number > 0 (``2e6`` is accepted)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (value >= 1 and value == int(value)):
+        raise argparse.ArgumentTypeError(f"{text!r}: give a whole number >= 1")
+    return int(value)
+
+
+#: Exit codes of ``mlsgalerkin run``.
+EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_WRITE_FAILED = 2, 3, 4
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
+    import dataclasses
     import json
     from pathlib import Path
 
-    from mlsgalerkin.problem import run_problem
+    from mlsgalerkin.io import CheckpointError
+    from mlsgalerkin.problem import load_problem, origin_of, prepare_problem
+    from mlsgalerkin.run_directory import RestartMismatch, RunDirectoryError
     from mlsgalerkin.scene import SceneError
-    from mlsgalerkin.simulation import SimulationDiverged
+    from mlsgalerkin.simulation import RunInterrupted, Simulation, SimulationDiverged
 
-    overrides = _parse_sets(args.set or [])
-    if args.dx is not None:
-        overrides["dx"] = args.dx
-    if args.t_end is not None:
-        overrides["t_end"] = args.t_end
-    if args.no_gif:
-        overrides["gif"] = "false"
     name = Path(args.problem).stem if args.problem.endswith(".py") else args.problem
     out = Path(args.out or f"results/{name}")
+    output: dict = {}
+    if args.frame_every is not None:
+        output["every"] = args.frame_every
+    if args.checkpoint_every is not None:
+        output["checkpoint_every"] = args.checkpoint_every
+    if args.checkpoint_wall is not None:
+        output["checkpoint_wall_every"] = args.checkpoint_wall
+    if args.no_gif:
+        output.update(gif=False, png=False)
     try:
-        result, results = run_problem(args.problem, overrides, out=out, progress=not args.no_progress,
-                                      restart="latest" if args.restart else None)
-    except (ValueError, SceneError, FileNotFoundError) as err:
+        overrides = _parse_sets(args.set or [])
+        if args.dx is not None:
+            overrides["dx"] = args.dx
+        if args.t_end is not None:
+            overrides["t_end"] = args.t_end
+        module = load_problem(args.problem)
+        fields = {f.name for f in dataclasses.fields(module.Parameters)}
+        if args.no_gif and "gif" in fields:
+            overrides["gif"] = "false"
+        if args.frame_every is not None and "frame_every" in fields:
+            overrides["frame_every"] = args.frame_every
+        prepared = prepare_problem(module, overrides, output=output, max_particles=args.max_particles)
+        prepared.origin = origin_of(args.problem)
+        print(f"{name}: {prepared.describe()}", flush=True)
+        if args.check:
+            print("the problem and its scene are valid (--check: nothing was run)")
+            return 0
+        analyse = getattr(module, "analyse", None)
+        params = prepared.params
+        result = Simulation(prepared.scene).run(
+            out=out, progress=not args.no_progress, restart="latest" if args.restart else None,
+            overwrite=args.overwrite, allow_changes=args.allow_changes, origin=prepared.origin,
+            analyse=(lambda r: analyse(r, params)) if analyse else None)
+        results = result.results or {}
+    except (RestartMismatch, RunDirectoryError, CheckpointError, SceneError, ValueError, FileNotFoundError) as err:
         print(f"error: {err}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
     except SimulationDiverged as err:
         print(f"error: {err}", file=sys.stderr)
         print(f"the run's summary (with the diagnosis) is in {out / 'summary.json'}", file=sys.stderr)
-        return 3
+        return EXIT_DIVERGED
+    except RunInterrupted as err:
+        where = f" (checkpoint {err.checkpoint})" if err.checkpoint else ""
+        print(f"\n{name}: {err}; its files are written{where}. Continue it with the same command and --restart.",
+              file=sys.stderr)
+        return 128 + int(err.signum)
+    except OSError as err:
+        print(f"error: writing the run's files failed: {err}. The files written before are intact; free space "
+              "(or fix the directory) and continue with --restart.", file=sys.stderr)
+        return EXIT_WRITE_FAILED
     s = result.summary
     fluid = s.get("fluid", {})
     particles = fluid.get("particles", {})
@@ -154,7 +222,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dx", type=float, help="particle spacing (m)")
     p.add_argument("--t-end", type=float, help="end time (s)")
     p.add_argument("--out", help="run directory (default results/PROBLEM)")
-    p.add_argument("--restart", action="store_true", help="continue from the latest checkpoint in --out")
+    p.add_argument("--restart", action="store_true",
+                   help="continue the run in --out from its newest valid checkpoint (same parameters; a longer "
+                        "--t-end extends it)")
+    p.add_argument("--allow-changes", action="store_true",
+                   help="with --restart: continue although parameters differ from the checkpoint's (recorded in "
+                        "summary.json)")
+    p.add_argument("--overwrite", action="store_true", help="replace a run already in --out")
+    p.add_argument("--check", action="store_true",
+                   help="check the parameters and the scene, print the size of the run, and stop")
+    p.add_argument("--frame-every", type=_positive_seconds, metavar="S", help="simulated seconds between VTU frames")
+    p.add_argument("--checkpoint-every", type=_positive_seconds, metavar="S",
+                   help="simulated seconds between checkpoints (default t_end/10)")
+    p.add_argument("--checkpoint-wall", type=_positive_seconds, metavar="S",
+                   help="wall-clock seconds between checkpoints (default 120)")
+    p.add_argument("--max-particles", type=_positive_count, default=2_000_000, metavar="N",
+                   help="refuse scenes with more particles than this, before building them (default 2e6)")
     p.add_argument("--no-gif", action="store_true", help="skip the animation")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.set_defaults(func=_cmd_run)

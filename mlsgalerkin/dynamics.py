@@ -174,6 +174,11 @@ class Interaction(ABC):
         """Largest stable time step this interaction allows (s); ``inf`` if none."""
         return float("inf")
 
+    def __repr__(self) -> str:
+        """Names the interaction and its bodies; subclasses add their parameters (a run's identity
+        compares reprs, so a restart with other parameters is noticed)."""
+        return f"{type(self).__name__}(name={self.name!r}, first={self.first!r}, second={self.second!r})"
+
     def summary(self) -> dict[str, Any]:
         """Diagnostics for ``summary.json``."""
         return {}

@@ -4,7 +4,9 @@ pictures. Every side effect of a run is a monitor; the solvers know nothing of f
 A monitor follows py-pde's trackers: :meth:`Monitor.start` once (with the
 :class:`~mlsgalerkin.simulation.RunState` and the :class:`RunInfo`), :meth:`Monitor.handle`
 after every step, :meth:`Monitor.finish` once at the end of every run — completed, paused
-(``max_steps``), stopped by the watchdog or interrupted — with the run's status. Monitors see
+(``max_steps``), stopped by the watchdog, interrupted — with the run's status. What a monitor
+needs to continue after a restart exactly as it would have without it (the next sampling
+time, the next frame) is its :meth:`Monitor.state_dict`, stored in every checkpoint. Monitors see
 the state (positions, velocities, the observables of each system, ``state.snapshot()`` for a
 checkpoint) and the run's metadata, never the solvers. Each decides itself when to act (every
 step, every so many simulated seconds, at given times).
@@ -19,7 +21,8 @@ monitor             writes
                     :class:`SimulationDiverged` naming the particle, quantity and step otherwise
 :class:`TimeSeries` ``timeseries.csv``: ``time, dt, step``, each system's observables, the probes
 :class:`Frames`     ``particles.pvd`` + ``particles_*.vtu`` (one series per system)
-:class:`Checkpoints` ``checkpoints/checkpoint_<step>.npz`` every ``checkpoint_every`` and at the end
+:class:`Checkpoints` ``checkpoints/checkpoint_<step>.npz`` every ``checkpoint_every`` simulated
+                    seconds or ``checkpoint_wall_every`` seconds of wall clock, and at the end
 :class:`ProgressBar` a tqdm bar of simulated time (steps/s, ``dt``)
 :class:`Pictures`   ``animation.gif``, ``final.png`` from the frames
 ==================  ==============================================================================
@@ -87,15 +90,18 @@ class Output:
 
     ``every``: simulated seconds between VTU frames; ``times``: explicit frame times instead;
     ``probe_every``: seconds between time-series rows (default every step); ``checkpoint_every``:
-    seconds between checkpoints (``None``: only at the end); ``vtu``: write frames;
-    ``gif``/``png``: render the animation / a final snapshot coloured by ``color_by``;
-    ``keep_checkpoints``: how many periodic checkpoints to keep.
+    simulated seconds between checkpoints (default ``t_end/10``); ``checkpoint_wall_every``:
+    wall-clock seconds between checkpoints (default 120; ``None``: none by wall clock) — a
+    checkpoint is written when either is due, so a killed run loses at most that much work;
+    ``vtu``: write frames; ``gif``/``png``: render the animation / a final snapshot coloured by
+    ``color_by``; ``keep_checkpoints``: how many periodic checkpoints to keep.
     """
 
     every: float | None = None
     times: tuple[float, ...] = ()
     probe_every: float | None = None
     checkpoint_every: float | None = None
+    checkpoint_wall_every: float | None = 120.0
     vtu: bool = True
     gif: bool = False
     png: bool = False
@@ -104,7 +110,7 @@ class Output:
 
     def problems(self) -> list[str]:
         out = []
-        for name in ("every", "probe_every", "checkpoint_every"):
+        for name in ("every", "probe_every", "checkpoint_every", "checkpoint_wall_every"):
             v = getattr(self, name)
             if v is not None and not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 out.append(f"output.{name} must be a positive number of seconds, got {v!r}")
@@ -151,6 +157,13 @@ class Monitor:
     def summary(self) -> dict[str, Any]:
         """Report for ``summary.json`` (JSON-serialisable; empty: nothing to report)."""
         return {}
+
+    def state_dict(self) -> dict[str, Any]:
+        """What this monitor needs to continue identically after a restart (JSON-serialisable)."""
+        return {}
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        """Restore :meth:`state_dict` (called after :meth:`start` when a run is restarted)."""
 
 
 # --------------------------------------------------------------------------------------
@@ -277,10 +290,16 @@ class TimeSeries(Monitor):
         self._flushed = time.perf_counter()
 
     def finish(self, state: "RunState", status: str) -> None:
-        rows = self._writer.rows
-        if status in ("completed", "paused") and (not rows or rows[-1]["time"] < state.t):
-            self.record(state)
+        # the last step of a completed run is always recorded by handle(); a paused or
+        # interrupted run gets no extra row, so that a restart continues the same rows
         self.flush()
+
+    def state_dict(self) -> dict[str, Any]:
+        return {"next": getattr(self, "_next", 0.0)}
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        if "next" in d:
+            self._next = float(d["next"])
 
     def columns(self) -> dict[str, np.ndarray]:
         """One array per column (``int64`` for integer columns, else ``float64``)."""
@@ -338,7 +357,9 @@ class Frames(Monitor):
                 self._next += 1
 
     def finish(self, state: "RunState", status: str) -> None:
-        if status not in ("completed", "paused"):
+        # only a completed run gets a final frame: a paused or interrupted run continues later
+        # and must then write the same frames as one that never stopped
+        if status != "completed":
             return
         for key, series in self._series.items():
             if not series.frames or series.frames[-1][0] < state.t - TIME_TOLERANCE:
@@ -348,17 +369,32 @@ class Frames(Monitor):
     def summary(self) -> dict[str, Any]:
         return {"frames": {k: len(s.frames) for k, s in self._series.items()}} if self._series else {}
 
+    def state_dict(self) -> dict[str, Any]:
+        return {"next": getattr(self, "_next", 0)}
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        if "next" in d:
+            self._next = int(d["next"])
+
 
 class Checkpoints(Monitor):
-    """Restart files ``checkpoints/checkpoint_<step>.npz`` every ``every`` simulated seconds
-    (``None``: only at the end), keeping the newest ``keep``; the final state at the end of a
-    completed or paused run."""
+    """Restart files ``checkpoints/checkpoint_<step>.npz`` every ``every`` simulated seconds or
+    every ``wall_every`` seconds of wall clock (whichever is due first; ``None`` disables
+    either), keeping the newest ``keep``; and the final state of a completed, paused or
+    interrupted run.
+
+    ``before_write``: monitors flushed before each checkpoint (the time series), so that the
+    files on disk always hold everything up to the newest checkpoint.
+    """
 
     name = "checkpoints"
 
-    def __init__(self, every: float | None = None, keep: int = 2) -> None:
+    def __init__(self, every: float | None = None, keep: int = 2, wall_every: float | None = None,
+                 before_write: Sequence[Any] = ()) -> None:
         self.every = every
         self.keep = keep
+        self.wall_every = wall_every
+        self.before_write = list(before_write)
 
     def start(self, state: "RunState", info: RunInfo) -> None:
         self._dir = info.out / "checkpoints" if info.out is not None else None
@@ -369,7 +405,9 @@ class Checkpoints(Monitor):
             self._next = (math.floor(state.t / ce + 1e-9) + 1) * ce
         else:
             self._next = ce if ce else math.inf
+        self._wall = time.perf_counter()
         self.written = 0
+        self.last: Path | None = None
 
     def write(self, state: "RunState") -> Path | None:
         """Write the current state's checkpoint and prune old ones; returns its path."""
@@ -377,20 +415,37 @@ class Checkpoints(Monitor):
             return None
         from mlsgalerkin.io import checkpoint_path, prune_checkpoints, save_checkpoint
 
+        for m in self.before_write:
+            m.flush()
         arrays, meta = state.snapshot()
         path = save_checkpoint(checkpoint_path(self._dir, int(state.step)), arrays, meta)
         prune_checkpoints(self._dir, keep=self.keep)
         self.written += 1
+        self.last = path
+        self._wall = time.perf_counter()
         return path
 
     def handle(self, state: "RunState", t: float) -> None:
-        if t >= self._next - TIME_TOLERANCE:
+        due = t >= self._next - TIME_TOLERANCE
+        if due or (self.wall_every is not None and time.perf_counter() - self._wall >= self.wall_every):
             self.write(state)
+        if due:
             self._next = (math.floor(t / self.every + 1e-9) + 1) * self.every
 
     def finish(self, state: "RunState", status: str) -> None:
-        if status in ("completed", "paused"):
+        if status in ("completed", "paused", "interrupted"):
             self.write(state)
+
+    def state_dict(self) -> dict[str, Any]:
+        nxt = getattr(self, "_next", math.inf)
+        return {"next": nxt if math.isfinite(nxt) else None}
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        if d.get("next") is not None:
+            self._next = float(d["next"])
+
+    def summary(self) -> dict[str, Any]:
+        return {"written": self.written, "last": self.last.name if self.last else None} if self._dir else {}
 
 
 # --------------------------------------------------------------------------------------

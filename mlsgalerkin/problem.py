@@ -9,6 +9,9 @@ user's — defines:
     the scene for those parameters;
 ``analyse(result, params) -> dict`` (optional)
     the results (errors against references, measured speeds), with a one-line ``"headline"``;
+``check(params) -> list[str]`` (optional)
+    every problem with the parameters (a negative gravity, a tank shorter than its column), each
+    saying what is wrong and how to fix it — :func:`require_positive` and friends help;
 ``SMOKE`` (optional)
     parameter overrides for a seconds-long run (the tests' smoke runs).
 
@@ -21,6 +24,7 @@ as the starting point of your own case.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import importlib
 import importlib.util
 import math
@@ -30,7 +34,26 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-__all__ = ["ProblemError", "load_problem", "parse_overrides", "run_problem", "shipped_problems"]
+__all__ = [
+    "DEFAULT_MAX_PARTICLES",
+    "PreparedProblem",
+    "ProblemError",
+    "load_problem",
+    "origin_of",
+    "parse_overrides",
+    "prepare_problem",
+    "require",
+    "require_nonnegative",
+    "require_positive",
+    "run_problem",
+    "shipped_problems",
+]
+
+#: The largest scene ``mlsgalerkin run`` builds unless ``--max-particles`` raises it: a 2D step of
+#: that many particles takes about a second on two cores, and the run needs about 4 GB.
+DEFAULT_MAX_PARTICLES = 2_000_000
+#: Bytes per particle of a running scene (state, neighbour and shape tables, temporaries).
+_BYTES_PER_PARTICLE = {2: 2_000, 3: 6_000}
 
 
 class ProblemError(ValueError):
@@ -135,20 +158,151 @@ def parse_overrides(params_cls: type, overrides: dict[str, Any]) -> Any:
     return params_cls(**kwargs)
 
 
+def require(condition: bool, message: str) -> list[str]:
+    """``[message]`` if ``condition`` is false, else ``[]`` (for a problem's ``check``)."""
+    return [] if condition else [message]
+
+
+def require_positive(params: Any, *names: str) -> list[str]:
+    """A message for every named parameter that is not a finite number ``> 0``."""
+    out = []
+    for name in names:
+        v = getattr(params, name)
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            out.append(f"parameter {name} must be a positive number, got {v!r}")
+    return out
+
+
+def require_nonnegative(params: Any, *names: str) -> list[str]:
+    """A message for every named parameter that is not a finite number ``>= 0``."""
+    out = []
+    for name in names:
+        v = getattr(params, name)
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+            out.append(f"parameter {name} must be a number >= 0, got {v!r}")
+    return out
+
+
+def _finite_problems(params: Any) -> list[str]:
+    out = []
+    for f in dataclasses.fields(params):
+        v = getattr(params, f.name)
+        if isinstance(v, float) and not math.isfinite(v):
+            out.append(f"parameter {f.name} must be a finite number, got {v!r}")
+    return out
+
+
+@dataclasses.dataclass
+class PreparedProblem:
+    """A problem loaded, its parameters read and checked, its scene built and validated."""
+
+    module: ModuleType
+    params: Any
+    scene: Any
+    origin: dict[str, Any]
+    estimate: dict[str, Any]
+
+    def describe(self) -> str:
+        """One line: particles, memory, frames and checkpoints of the run."""
+        e = self.estimate
+        text = (f"{e['particles']:,} particles ({e['fluid_particles']:,} fluid), about {e['memory_mb']:,.0f} MB, "
+                f"{e['frames']} frames")
+        ck = e.get("checkpoint_every_s")
+        wall = e.get("checkpoint_wall_every_s")
+        if ck or wall:
+            text += ", a checkpoint every " + " or ".join(
+                x for x in (f"{ck:.4g} s of simulated time" if ck else "", f"{wall:g} s of wall clock" if wall else "") if x)
+        return text
+
+
+def prepare_problem(problem: str | Path | ModuleType, overrides: dict[str, Any] | None = None, *,
+                    output: dict[str, Any] | None = None, max_particles: int | None = DEFAULT_MAX_PARTICLES,
+                    ) -> PreparedProblem:
+    """Everything before the first step, with every mistake reported before any work: load the
+    problem, read and check its parameters (types, finiteness, the problem's ``check``), build
+    its scene within ``max_particles`` (a lattice larger than that is refused before it is
+    allocated), apply ``output`` overrides (``Output`` fields: ``every``, ``checkpoint_every``,
+    ``checkpoint_wall_every``, …) and validate the scene."""
+    from mlsgalerkin.fluid.bodies import FluidBody, particle_limit
+    mod = problem if isinstance(problem, ModuleType) else load_problem(problem)
+    params = parse_overrides(mod.Parameters, overrides or {})
+    problems = _finite_problems(params)
+    check = getattr(mod, "check", None)
+    if callable(check) and not problems:
+        problems = list(check(params))
+    if problems:
+        lines = "\n".join(f"  - {p}" for p in problems)
+        raise ProblemError(f"{len(problems)} problem{'s' if len(problems) > 1 else ''} with the parameters:\n{lines}")
+    from mlsgalerkin.scene import Scene
+
+    try:
+        with particle_limit(max_particles):
+            scene = mod.make_scene(params)
+    except (ValueError, ArithmeticError) as exc:  # a make_scene that could not build: say so, not a traceback
+        raise ProblemError(f"could not build the scene with these parameters: {exc}") from exc
+    if not isinstance(scene, Scene):
+        raise ProblemError(f"make_scene returned {type(scene).__name__}, not a Scene")
+    if output:
+        try:
+            scene.output = dataclasses.replace(scene.output, **output)
+        except TypeError as exc:
+            raise ProblemError(f"unknown output setting: {exc}") from exc
+    n = sum(getattr(b, "n", 0) for b in scene.bodies)
+    if max_particles is not None and n > max_particles:
+        raise ProblemError(f"the scene has {n:,} particles, above the limit of {max_particles:,}; coarsen the "
+                           "spacing, or raise the limit (--max-particles) if the machine has the memory and the time")
+    scene.validate()  # SceneError: every problem at once
+    dim = scene.dim or 2
+    o = scene.output
+    if o.times:
+        frames = len(o.times)
+    elif o.every:
+        frames = int(math.floor(scene.t_end / o.every + 1e-9)) + 1
+    else:
+        frames = 2
+    fluid = sum(b.n for b in scene.bodies if isinstance(b, FluidBody))
+    estimate = {"particles": n, "fluid_particles": fluid, "memory_mb": n * _BYTES_PER_PARTICLE.get(dim, 6000) / 1e6,
+                "frames": frames if o.vtu else 0,
+                "checkpoint_every_s": o.checkpoint_every if o.checkpoint_every is not None else scene.t_end / 10,
+                "checkpoint_wall_every_s": o.checkpoint_wall_every}
+    origin = origin_of(mod if isinstance(problem, ModuleType) else problem)
+    return PreparedProblem(mod, params, scene, origin, estimate)
+
+
+def origin_of(problem: str | Path | ModuleType) -> dict[str, Any]:
+    """Where a problem comes from, for a run's identity: ``{"problem": name}`` for a shipped one,
+    ``{"file": name, "sha256": ...}`` for a file (a changed file is another run)."""
+    if isinstance(problem, ModuleType):
+        path = Path(getattr(problem, "__file__", "") or "")
+        if problem.__name__.startswith("mlsgalerkin.problems."):
+            return {"problem": problem.__name__.rpartition(".")[2]}
+    elif str(problem).endswith(".py") or "/" in str(problem) or "\\" in str(problem):
+        path = Path(str(problem)).expanduser()
+    else:
+        return {"problem": str(problem)}
+    if not path.is_file():
+        return {"module": getattr(problem, "__name__", str(problem))}
+    return {"file": path.name, "sha256": hashlib.sha256(path.read_bytes()).hexdigest()}
+
+
 def run_problem(problem: str | Path | ModuleType, overrides: dict[str, Any] | None = None,
-                out: str | Path | None = None, *, progress: bool = True, restart: str | Path | None = None):
+                out: str | Path | None = None, *, progress: bool = True, restart: str | Path | None = None,
+                overwrite: bool = False, allow_changes: bool = False, output: dict[str, Any] | None = None,
+                max_particles: int | None = DEFAULT_MAX_PARTICLES):
     """Build problem ``problem`` (name, file or module) with ``overrides``, run it, analyse it.
 
+    Everything is checked before the first step (:func:`prepare_problem`). ``restart``,
+    ``overwrite`` and ``allow_changes`` are those of :meth:`~mlsgalerkin.simulation.Simulation.run`.
     Returns ``(result, results)``: the :class:`~mlsgalerkin.simulation.RunResult` and the
     problem's results dict (empty without ``analyse``), which ``summary.json`` holds under
     ``"results"``.
     """
     from mlsgalerkin.simulation import Simulation
 
-    mod = problem if isinstance(problem, ModuleType) else load_problem(problem)
-    params = parse_overrides(mod.Parameters, overrides or {})
-    scene = mod.make_scene(params)
-    analyse = getattr(mod, "analyse", None)
-    result = Simulation(scene).run(out=out, progress=progress, restart=restart,
-                                   analyse=(lambda r: analyse(r, params)) if analyse else None)
+    prepared = prepare_problem(problem, overrides, output=output, max_particles=max_particles)
+    analyse = getattr(prepared.module, "analyse", None)
+    params = prepared.params
+    result = Simulation(prepared.scene).run(
+        out=out, progress=progress, restart=restart, overwrite=overwrite, allow_changes=allow_changes,
+        origin=prepared.origin, analyse=(lambda r: analyse(r, params)) if analyse else None)
     return result, result.results or {}

@@ -31,7 +31,10 @@ from mlsgalerkin.approximation.settings import Approximation
 from mlsgalerkin.dynamics import Body, Interaction, Solver
 from mlsgalerkin.monitors import Monitor, Output, Probe, Watchdog
 
-__all__ = ["Approximation", "Output", "Probe", "Scene", "SceneError", "Watchdog", "solver_class"]
+__all__ = ["MAX_FRAMES", "Approximation", "Output", "Probe", "Scene", "SceneError", "Watchdog", "solver_class"]
+
+#: The most VTU frames a scene may ask for (a frame of 10⁵ particles is about 5 MB).
+MAX_FRAMES = 20_000
 
 
 class SceneError(ValueError):
@@ -153,6 +156,13 @@ class Scene:
         for m in (self.watchdog, *(m for m in self.monitors if isinstance(m, Monitor))):
             out.extend(m.problems())
         out.extend(self.output.problems())
+        o = self.output
+        valid = lambda v: isinstance(v, (int, float)) and np.isfinite(v) and v > 0  # noqa: E731
+        if valid(self.t_end) and valid(o.every) and o.vtu and self.t_end / o.every > MAX_FRAMES:
+            out.append(f"output.every = {o.every:g} s would write {self.t_end / o.every:.3g} frames up to t_end = "
+                       f"{self.t_end:g} s, more than {MAX_FRAMES:,}; choose a larger interval (--frame-every)")
+        if len(o.times) > MAX_FRAMES:
+            out.append(f"output.times lists {len(o.times):,} frames, more than {MAX_FRAMES:,}")
         pnames = [p.name for p in self.probes]
         dup_p = sorted({n for n in pnames if pnames.count(n) > 1})
         if dup_p:

@@ -19,7 +19,10 @@ The loop knows no physics: see ``docs/architecture.md``.
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import signal
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -38,14 +41,63 @@ from mlsgalerkin.monitors import (
     SimulationDiverged,
     TimeSeries,
 )
+from mlsgalerkin.run_directory import (
+    RestartMismatch,
+    RunDirectoryError,
+    claim_directory,
+    identity_differences,
+    newest_checkpoint_of_run,
+    read_manifest,
+)
 from mlsgalerkin.scene import Scene
 
-__all__ = ["RunResult", "RunState", "Simulation", "SimulationDiverged"]
+__all__ = ["RestartMismatch", "RunInterrupted", "RunResult", "RunState", "Simulation", "SimulationDiverged"]
 
 logger = logging.getLogger(__name__)
 
 #: Layout of the checkpoint metadata written by :meth:`Simulation.snapshot`.
 CHECKPOINT_LAYOUT = 2
+
+
+class RunInterrupted(KeyboardInterrupt):
+    """SIGINT or SIGTERM stopped a run after a complete step; its files and a checkpoint are
+    written (``checkpoint``), and ``restart="latest"`` continues it."""
+
+    def __init__(self, signum: int, t: float, step: int) -> None:
+        super().__init__(f"interrupted by {_signal_name(signum)} at t = {t:.6g} s (step {step})")
+        self.signum, self.t, self.step = signum, t, step
+        self.checkpoint: Path | None = None
+
+
+def _signal_name(signum: int) -> str:
+    try:
+        return signal.Signals(signum).name
+    except ValueError:
+        return f"signal {signum}"
+
+
+@contextlib.contextmanager
+def _stop_on_signals():
+    """While active (main thread only), SIGINT and SIGTERM append their number to the yielded
+    list instead of interrupting; a second one of the same kind acts as usual."""
+    stop: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+    previous = {}
+
+    def handler(signum, frame):
+        stop.append(signum)
+        signal.signal(signum, previous[signum])  # a second Ctrl-C stops at once
+
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        previous[sig] = signal.getsignal(sig)
+        signal.signal(sig, handler)
+    try:
+        yield stop
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
 
 
 @dataclass
@@ -108,6 +160,37 @@ class Simulation:
         self.state = RunState(t=0.0, step=0, dt=0.0, systems={s.key: s.state for s in self.solvers},
                               _snapshot=self.snapshot)
         self.started = False
+        self.identity = self._identity()
+        self._monitors: list[Monitor] = []
+        self._changes: list[dict] = []
+
+    def _identity(self, origin: dict | None = None) -> dict[str, Any]:
+        """What makes this run this run: scene, problem, parameters, physics settings, version,
+        and a SHA-256 of the initial state (every solver's arrays before the first step)."""
+        import hashlib
+
+        import mlsgalerkin
+        from mlsgalerkin.io import to_jsonable
+
+        sc = self.scene
+        digest = hashlib.sha256()
+        for s in self.solvers:
+            arrays, _ = s.checkpoint()
+            for name in sorted(arrays):
+                a = np.ascontiguousarray(arrays[name])
+                digest.update(f"{s.key}/{name}/{a.dtype}/{a.shape}".encode())
+                digest.update(a.tobytes())
+        integrator = getattr(sc.integrator, "name", sc.integrator)
+        settings = {
+            "bodies": [f"{type(b).__name__}({b.name!r})" for b in sc.bodies],
+            "effects": [repr(e) for e in sc.effects],
+            "approximation": to_jsonable(sc.approximation.__dict__),
+            "integrator": str(integrator), "mass": sc.mass, "safety": sc.safety, "dt_max": sc.dt_max,
+            "interactions": [repr(i) for i in sc.interactions],
+        }
+        return {"scene": sc.name, "problem": origin, "parameters": to_jsonable(sc.parameters),
+                "settings": to_jsonable(settings), "initial_state_sha256": digest.hexdigest(),
+                "mlsgalerkin_version": mlsgalerkin.__version__}
 
     def solver(self, key: str) -> Solver:
         """The solver whose state is ``state.systems[key]`` (``"fluid"``)."""
@@ -155,7 +238,8 @@ class Simulation:
         arrays: dict[str, np.ndarray] = {}
         meta: dict[str, Any] = {"layout": CHECKPOINT_LAYOUT, "scene": self.scene.name, "t": st.t,
                                 "step": st.step, "dt": st.dt, "parameters": to_jsonable(self.scene.parameters),
-                                "solvers": {}}
+                                "identity": self.identity, "changes": self._changes, "solvers": {},
+                                "monitors": {m.name: m.state_dict() for m in self._monitors}}
         for s in self.solvers:
             a, m = s.checkpoint()
             arrays.update({f"{s.key}__{k}": v for k, v in a.items()})
@@ -163,7 +247,17 @@ class Simulation:
         return arrays, meta
 
     def restore(self, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> None:
-        """Load a :meth:`snapshot` into this simulation (built from the same scene)."""
+        """Load a :meth:`snapshot` into this simulation (built from the same scene). A checkpoint
+        whose metadata is incomplete raises :class:`~mlsgalerkin.io.CheckpointError`."""
+        from mlsgalerkin.io import CheckpointError
+
+        try:
+            self._restore(arrays, meta)
+        except (KeyError, TypeError, AttributeError, IndexError) as exc:
+            raise CheckpointError(f"checkpoint metadata is damaged or incomplete ({type(exc).__name__}: {exc}); "
+                                  "restart from an earlier checkpoint") from exc
+
+    def _restore(self, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> None:
         if meta.get("layout") != CHECKPOINT_LAYOUT:
             raise ValueError(
                 f"checkpoint metadata layout {meta.get('layout')!r} is not {CHECKPOINT_LAYOUT}: it was written by "
@@ -177,6 +271,7 @@ class Simulation:
             s.restore({k[len(prefix):]: v for k, v in arrays.items() if k.startswith(prefix)}, meta["solvers"][s.key])
         st = self.state
         st.t, st.step, st.dt = float(meta["t"]), int(meta["step"]), float(meta["dt"])
+        self._changes = list(meta.get("changes", []))
         self.started = True
 
     # ------------------------------------------------------------------ run
@@ -185,11 +280,14 @@ class Simulation:
         progress bar, pictures), then ``scene.monitors``."""
         sc = self.scene
         o = sc.output
-        ms: list[Monitor] = [sc.watchdog, TimeSeries(sc.probes, every=o.probe_every)]
+        series = TimeSeries(sc.probes, every=o.probe_every)
+        ms: list[Monitor] = [sc.watchdog, series]
         if out is not None:
             if o.vtu:
                 ms.append(Frames(every=o.every, times=o.times))
-            ms.append(Checkpoints(every=o.checkpoint_every, keep=o.keep_checkpoints))
+            every = o.checkpoint_every if o.checkpoint_every is not None else sc.t_end / 10
+            ms.append(Checkpoints(every=every, keep=o.keep_checkpoints, wall_every=o.checkpoint_wall_every,
+                                  before_write=[series]))
         if progress:
             ms.append(ProgressBar())
         if out is not None and (o.gif or o.png):
@@ -197,66 +295,84 @@ class Simulation:
         return ms + list(sc.monitors)
 
     def run(self, out: str | Path | None = None, *, progress: bool = True, restart: str | Path | None = None,
-            max_steps: int | None = None, analyse: Callable[[RunResult], dict] | None = None) -> RunResult:
+            max_steps: int | None = None, analyse: Callable[[RunResult], dict] | None = None,
+            overwrite: bool = False, allow_changes: bool = False, origin: dict | None = None) -> RunResult:
         """Run to ``scene.t_end`` (or ``max_steps`` steps) and return a :class:`RunResult`.
 
-        ``out``: run directory for ``timeseries.csv``, the VTU/PVD series, checkpoints,
-        ``summary.json`` and pictures (nothing is written without it; the time series is kept
-        in memory either way). ``restart``: a checkpoint file, or ``"latest"`` for the newest in
-        ``out/checkpoints``. ``analyse(result) -> dict``: the problem's analysis, run before
-        ``summary.json`` is written; its results go under ``"results"``.
-        """
-        from mlsgalerkin.io import latest_checkpoint, load_checkpoint
+        ``out``: run directory for ``run.json``, ``timeseries.csv``, the VTU/PVD series,
+        checkpoints, ``summary.json`` and pictures (nothing is written without it; the time series
+        is kept in memory either way). A directory that holds another run is refused unless
+        ``overwrite`` (which deletes that run's files). ``restart``: ``"latest"`` continues from
+        the newest valid checkpoint of the run in ``out``, or a checkpoint file; the scene must be
+        the one that wrote it (:mod:`mlsgalerkin.run_directory`) unless ``allow_changes``, which
+        records the changes in ``summary.json``. ``analyse(result) -> dict``: the problem's
+        analysis, run before ``summary.json`` is written; its results go under ``"results"``.
+        ``origin``: where the scene came from (problem name or file and its hash), part of the
+        run's identity.
 
+        SIGINT (Ctrl-C) and SIGTERM stop the run after the step in progress: the files and a
+        checkpoint are written, and :class:`RunInterrupted` is raised; ``restart="latest"``
+        continues to the same end state and time series as a run that never stopped.
+        """
         out = Path(out) if out is not None else None
         if out is not None:
+            if out.exists() and not out.is_dir():
+                raise RunDirectoryError(f"the output directory {out} is a file; choose a directory (--out)")
             out.mkdir(parents=True, exist_ok=True)
+        self.identity = self._identity(origin)
+        monitors = self.monitors(out, progress)
+        saved_monitors: dict = {}
         if restart is not None:
-            if str(restart) == "latest":
-                if out is None:
-                    raise ValueError("restart='latest' needs the run directory: pass out=")
-                path = latest_checkpoint(out / "checkpoints")
-                if path is None:
-                    raise FileNotFoundError(f"no checkpoint found in {out / 'checkpoints'}")
-            else:
-                path = Path(restart)
-            arrays, meta = load_checkpoint(path)
-            self.restore(arrays, meta)
-            logger.info("restarted from %s at t = %.6g s (step %d)", path, self.state.t, self.state.step)
-        elif not self.started:
-            self.start()
+            saved_monitors = self._restart_from(restart, out, allow_changes)
+        else:
+            if out is not None:
+                self.identity = claim_directory(out, self.identity, overwrite)
+            if not self.started:
+                self.start()
         sc, st = self.scene, self.state
         info = RunInfo(scene=sc.name, t_end=sc.t_end, dim=sc.dim, out=out, resumed=restart is not None,
                        parameters=dict(sc.parameters))
-        monitors = self.monitors(out, progress)
         series = next(m for m in monitors if isinstance(m, TimeSeries))
+        self._monitors = monitors
         for m in monitors:
             m.start(st, info)
+            if m.name in saved_monitors:
+                m.load_state_dict(saved_monitors[m.name])
         wall0 = time.perf_counter()
         steps0 = st.step
         status, diagnosis, error = "running", None, None
-        try:
-            while st.t < sc.t_end * (1 - 1e-12) and (max_steps is None or st.step - steps0 < max_steps):
-                dt = min(self.time_step(), sc.t_end - st.t)
-                self.step(dt)
-                for m in monitors:
-                    m.handle(st, st.t)
-            status = "completed" if st.t >= sc.t_end * (1 - 1e-12) else "paused"
-        except SimulationDiverged as err:
-            status, diagnosis, error = "diverged", err.diagnosis, err
-        except KeyboardInterrupt as err:
-            status, error = "interrupted", err
-        except Exception as err:
-            status, diagnosis, error = "failed", {"error": f"{type(err).__name__}: {err}"}, err
+        with _stop_on_signals() as stop:
+            try:
+                while st.t < sc.t_end * (1 - 1e-12) and (max_steps is None or st.step - steps0 < max_steps):
+                    dt = min(self.time_step(), sc.t_end - st.t)
+                    self.step(dt)
+                    for m in monitors:
+                        m.handle(st, st.t)
+                    if stop:
+                        break
+                if stop:
+                    status = "interrupted"
+                    signame = _signal_name(stop[0])
+                    diagnosis = {"signal": signame}
+                    error = RunInterrupted(stop[0], st.t, st.step)
+                else:
+                    status = "completed" if st.t >= sc.t_end * (1 - 1e-12) else "paused"
+            except SimulationDiverged as err:
+                status, diagnosis, error = "diverged", err.diagnosis, err
+            except KeyboardInterrupt as err:  # outside the main thread: the state may be mid-step
+                status, error = "aborted", err
+            except Exception as err:
+                status, diagnosis, error = "failed", {"error": f"{type(err).__name__}: {err}"}, err
         wall = time.perf_counter() - wall0
         for m in monitors:
             try:
                 m.finish(st, status)
             except Exception as exc:  # a monitor must not hide the run's own outcome
-                if error is None:
+                if error is None or isinstance(error, RunInterrupted):
                     status, diagnosis, error = "failed", {"error": f"{type(exc).__name__}: {exc}"}, exc
                 else:
                     logger.warning("monitor %s failed while finishing (%s)", m.name, exc)
+        self._monitors = []
         summary = self.summary(wall, st.step - steps0, status, diagnosis, monitors)
         result = RunResult(state=st, timeseries=series.columns(), summary=summary, out=out)
         if analyse is not None and status in ("completed", "paused"):
@@ -267,10 +383,51 @@ class Simulation:
                 summary["analysis_error"] = f"{type(exc).__name__}: {exc}"
                 error = error or exc
         if out is not None:
-            self._write_summary(out, summary)
+            try:
+                self._write_summary(out, summary)
+            except OSError as exc:
+                logger.error("could not write %s (%s)", out / "summary.json", exc)
+                error = error or exc
+        if isinstance(error, RunInterrupted):
+            error.checkpoint = next((m.last for m in monitors if isinstance(m, Checkpoints)), None)
         if error is not None:
             raise error
         return result
+
+    def _restart_from(self, restart: str | Path, out: Path | None, allow_changes: bool) -> dict:
+        """Load the checkpoint to continue from; returns the monitors' saved states."""
+        from mlsgalerkin.io import load_checkpoint
+
+        if str(restart) == "latest":
+            if out is None:
+                raise ValueError("restart='latest' needs the run directory: pass out=")
+            manifest = read_manifest(out)
+            run_id = ((manifest or {}).get("identity") or {}).get("run_id")
+            path, arrays, meta, notes = newest_checkpoint_of_run(out, run_id)
+            for note in notes:
+                logger.warning("restart: %s", note)
+        else:
+            path = Path(restart)
+            arrays, meta = load_checkpoint(path)
+        saved = meta.get("identity") or {}
+        differences = identity_differences(saved, self.identity)
+        if float(meta.get("t", 0.0)) > self.scene.t_end * (1 + 1e-12):
+            differences.append(f"the checkpoint is at t = {meta.get('t')} s, after t_end = {self.scene.t_end} s")
+        if differences and not allow_changes:
+            raise RestartMismatch(
+                f"{path} was written by a different run, so continuing it would mix two runs:\n  - "
+                + "\n  - ".join(differences)
+                + "\nRestart with the parameters of that run (only t_end and output settings may change), start a "
+                "new run in another directory, or pass --allow-changes (allow_changes=True) to continue with the "
+                "changes recorded in summary.json")
+        self.restore(arrays, meta)
+        if saved.get("run_id"):
+            self.identity["run_id"] = saved["run_id"]
+        if differences:
+            self._changes.append({"t": self.state.t, "step": self.state.step, "changes": differences})
+            logger.warning("restart with changes at t = %.6g s: %s", self.state.t, "; ".join(differences))
+        logger.info("restarted from %s at t = %.6g s (step %d)", path, self.state.t, self.state.step)
+        return meta.get("monitors") or {}
 
     def summary(self, wall: float, steps: int, status: str = "completed", diagnosis: dict | None = None,
                 monitors: list[Monitor] = ()) -> dict[str, Any]:
@@ -285,6 +442,8 @@ class Simulation:
             "t_end_s": st.t, "steps": st.step, "steps_this_run": steps, "wall_time_s": wall,
             "particle_steps_per_s": nodes * steps / wall if wall > 0 else None,
         }
+        if self._changes:
+            out["continued_with_changes"] = self._changes
         for s in self.solvers:
             out[s.key] = s.summary()
         if self.scene.interactions:

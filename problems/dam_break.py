@@ -24,9 +24,10 @@ from mlsgalerkin.data import reference_columns
 from mlsgalerkin.fluid import (
     DensityFilter, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, hydrostatic_density, wall_box,
 )
+from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
 
-__all__ = ["Parameters", "make_scene", "analyse", "load_martin_moyce", "SMOKE"]
+__all__ = ["Parameters", "make_scene", "analyse", "check", "load_martin_moyce", "SMOKE"]
 
 SMOKE = {"dx": 0.0057, "t_end": 0.02}
 INCH = 0.0254
@@ -123,4 +124,18 @@ def analyse(result, p: Parameters, t_max: float = 3.0) -> dict:
     out["headline"] = (f"surge front: RMS deviation from Martin & Moyce {out['rms_deviation_Z']:.3f} (in Z = z/a) "
                        f"for T <= {t_max:g}, a/dx = {a / p.dx:.0f} ({out['rms_deviation_Z_time_shifted']:.3f} with "
                        f"the experiment's clock shifted by dT = {out['best_time_shift_T']:.2f})")
+    return out
+
+
+def check(p: Parameters) -> list[str]:
+    """Problems with the parameters (see ``mlsgalerkin.problem``)."""
+    out = require_positive(p, "column_width", "dx", "t_end", "rho", "h_factor", "c0_factor", "g", "frame_every")
+    out += require_nonnegative(p, "alpha")
+    out += require(p.tank_length_factor > 1,
+                   f"tank_length_factor = {p.tank_length_factor!r}: the tank must be longer than the column (> 1; "
+                   "the surge front needs room: 5.5 reaches T = 3.3)")
+    if not out:
+        out += require(p.column_width >= 4 * p.dx,
+                       f"dx = {p.dx:g} m leaves fewer than 4 particles across the {p.column_width:g} m column; "
+                       f"choose dx <= {p.column_width / 4:g} m")
     return out

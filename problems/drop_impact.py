@@ -24,9 +24,10 @@ from mlsgalerkin.fluid import (
     DensityFilter, FluidBody, Gravity, MonaghanViscosity, NewtonianViscosity, Phase, TaitPressure, Walls,
     hydrostatic_density, lattice, tait_stored_energy, wall_box,
 )
+from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
 
-__all__ = ["Parameters", "make_scene", "analyse", "PAPER_OUTPUT_TIMES", "SMOKE"]
+__all__ = ["Parameters", "make_scene", "analyse", "check", "PAPER_OUTPUT_TIMES", "SMOKE"]
 
 PAPER_OUTPUT_TIMES = (0.0018, 0.0099, 0.0297, 0.0477, 0.0657, 0.0837, 0.1017, 0.1197, 0.1377, 0.1557)
 SMOKE = {"dx": 0.004, "t_end": 0.01}
@@ -149,4 +150,19 @@ def analyse(result, p: Parameters) -> dict:
     out["headline"] = (f"reached t = {out['t_reached_s']:.4f} s; mass change {out['mass_change_kg']:.1e} kg; "
                        f"energy {out['energy_initial_J']:.4g} -> {out['energy_final_J']:.4g} J "
                        f"(max growth {out['energy_max_growth_relative_to_initial_kinetic']:+.2e} of the initial KE)")
+    return out
+
+
+def check(p: Parameters) -> list[str]:
+    """Problems with the parameters (see ``mlsgalerkin.problem``)."""
+    out = require_positive(p, "drop_diameter", "pool_width", "pool_depth", "speed", "rho", "dx", "t_end",
+                           "c0_factor", "h_factor", "g")
+    out += require_nonnegative(p, "viscosity", "alpha")
+    if not out:
+        out += require(p.drop_diameter < p.pool_width,
+                       f"the drop ({p.drop_diameter:g} m) must be narrower than the pool ({p.pool_width:g} m)")
+        out += require(p.drop_diameter >= 4 * p.dx, f"dx = {p.dx:g} m leaves fewer than 4 particles across the drop; "
+                                                    f"choose dx <= {p.drop_diameter / 4:g} m")
+        out += require(p.pool_depth >= 3 * p.dx, f"dx = {p.dx:g} m leaves fewer than 3 particle rows in the pool; "
+                                                 f"choose dx <= {p.pool_depth / 3:g} m")
     return out

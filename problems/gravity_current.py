@@ -35,9 +35,10 @@ from mlsgalerkin.fluid import (
     DensityFilter, FluidBody, Gravity, MonaghanViscosity, NewtonianViscosity, Phase, TaitPressure,
     Walls, hydrostatic_density, wall_box,
 )
+from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
 
-__all__ = ["Parameters", "make_scene", "analyse", "reference_head_speed", "SMOKE"]
+__all__ = ["Parameters", "make_scene", "analyse", "check", "reference_head_speed", "SMOKE"]
 
 SMOKE = {"dx": 0.006, "t_end": 0.05}
 
@@ -144,3 +145,19 @@ def analyse(result, p: Parameters) -> dict:
             f"({100 * rel:+.1f} %); Froude number {froude:.3f}" if math.isfinite(rel) else f"head speed not measured: {fit.get('note')}"
         ),
     }
+
+
+def check(p: Parameters) -> list[str]:
+    """Problems with the parameters (see ``mlsgalerkin.problem``)."""
+    out = require_positive(p, "depth", "length", "rho_light", "rho_heavy", "dx", "t_end", "c0", "h_factor", "g",
+                           "frame_every")
+    out += require_nonnegative(p, "viscosity", "alpha")
+    if not out:
+        out += require(p.rho_heavy > p.rho_light,
+                       f"rho_heavy = {p.rho_heavy:g} must exceed rho_light = {p.rho_light:g}: the heavy fluid runs "
+                       "under the light one")
+        out += require(p.depth >= 4 * p.dx, f"dx = {p.dx:g} m leaves fewer than 4 particle rows in the {p.depth:g} m "
+                                            f"depth; choose dx <= {p.depth / 4:g} m")
+        out += require(p.length >= 8 * p.dx, f"the tank ({p.length:g} m) must be at least 8 particles long")
+    out += require(p.slip in ("free_slip", "no_slip", "fixed"), f"slip must be free_slip, no_slip or fixed, got {p.slip!r}")
+    return out

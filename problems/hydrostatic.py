@@ -18,9 +18,10 @@ import numpy as np
 from mlsgalerkin.fluid import (
     DensityFilter, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, hydrostatic_density, wall_box,
 )
+from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
 
-__all__ = ["Parameters", "make_scene", "analyse", "SMOKE"]
+__all__ = ["Parameters", "make_scene", "analyse", "check", "SMOKE"]
 
 SMOKE = {"dx": 0.04, "t_end": 0.2}
 
@@ -91,4 +92,16 @@ def analyse(result, p: Parameters) -> dict:
     out["headline"] = (f"pressure RMS error {100 * out['pressure_rms_error_settled']:.2f} % of rho g H after settling; "
                        f"KE late/early max {out['kinetic_energy_max_late_J'] / max(out['kinetic_energy_max_early_J'], 1e-300):.2g}; "
                        f"{out['max_wall_crossings']} wall crossings")
+    return out
+
+
+def check(p: Parameters) -> list[str]:
+    """Problems with the parameters (see ``mlsgalerkin.problem``)."""
+    out = require_positive(p, "depth", "width", "dx", "t_end", "rho", "c0_factor", "h_factor", "g", "frame_every")
+    out += require_nonnegative(p, "alpha")
+    if not out:
+        out += require(min(p.depth, p.width) >= 4 * p.dx,
+                       f"dx = {p.dx:g} m leaves fewer than 4 particles across the {min(p.depth, p.width):g} m tank; "
+                       f"choose dx <= {min(p.depth, p.width) / 4:g} m")
+    out += require(p.slip in ("free_slip", "no_slip", "fixed"), f"slip must be free_slip, no_slip or fixed, got {p.slip!r}")
     return out

@@ -44,9 +44,10 @@ from mlsgalerkin.fluid import (
     hydrostatic_density, lattice,
 )
 from mlsgalerkin.motion import Oscillation
+from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
 
-__all__ = ["Parameters", "make_scene", "analyse", "wave_number", "height_over_stroke", "SMOKE"]
+__all__ = ["Parameters", "make_scene", "analyse", "check", "wave_number", "height_over_stroke", "SMOKE"]
 
 SMOKE = {"dx": 0.02, "t_end": 0.3, "tank_length": 1.0}
 
@@ -198,4 +199,19 @@ def analyse(result, p: Parameters) -> dict:
     out["headline"] = (f"wave height {1e3 * H:.2f} mm at x = {p.probe_x:g} m vs linear wave-maker theory "
                        f"{1e3 * H_theory:.2f} mm (H/S {H / p.stroke:.3f} vs {ratio_theory:.3f}, "
                        f"{100 * out['relative_error']:+.1f} %), kd = {kd:.2f}, {p.depth / p.dx:.0f} rows per depth")
+    return out
+
+
+def check(p: Parameters) -> list[str]:
+    """Problems with the parameters (see ``mlsgalerkin.problem``)."""
+    out = require_positive(p, "depth", "period", "tank_length", "dx", "t_end", "c0_factor", "h_factor", "g",
+                           "probe_every", "frame_every")
+    out += require_nonnegative(p, "stroke", "ramp_periods", "alpha")
+    if not out:
+        out += require(p.stroke < p.depth, f"the stroke ({p.stroke:g} m) must be smaller than the depth ({p.depth:g} m)")
+        out += require(0 < p.probe_x < p.tank_length,
+                       f"probe_x = {p.probe_x:g} m must lie inside the tank (0, {p.tank_length:g}) m")
+        out += require(p.depth >= 4 * p.dx, f"dx = {p.dx:g} m leaves fewer than 4 particle rows in the {p.depth:g} m "
+                                            f"depth; choose dx <= {p.depth / 4:g} m")
+        out += require(p.tank_length >= 2 * p.depth, f"the tank ({p.tank_length:g} m) must be at least two depths long")
     return out

@@ -33,7 +33,7 @@ from mlsgalerkin.fluid import (
 )
 from mlsgalerkin.io import latest_checkpoint, load_checkpoint, read_pvd, read_timeseries
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene, Watchdog
-from mlsgalerkin.simulation import Simulation, SimulationDiverged
+from mlsgalerkin.simulation import RestartMismatch, Simulation, SimulationDiverged
 
 G = 9.81
 GVEC = np.array([0.0, -G])
@@ -282,10 +282,16 @@ def test_watchdog_names_step_particle_and_quantity(tmp_path):
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["status"] == "diverged" and summary["diagnosis"]["particle"] == 7
     assert summary["steps"] == 5 and summary["fluid"]["particles"]["fluid"] == s_n_fluid(scene)
-    # the last good state restarts in a scene without the poison
+    # the last good state restarts in a scene without the poison: a change of the physics, so it
+    # is refused unless allowed, and then recorded in the summary
     clean = free_block(gravity=True, t_end=0.01)
-    s = Simulation(clean).run(out=tmp_path, restart=err.checkpoint, progress=False).state.fluid
+    with pytest.raises(RestartMismatch, match="PoisonForce"):
+        Simulation(clean).run(out=tmp_path, restart=err.checkpoint, progress=False)
+    res = Simulation(clean).run(out=tmp_path, restart=err.checkpoint, progress=False, allow_changes=True)
+    s = res.state.fluid
     assert s.t == pytest.approx(0.01) and np.all(np.isfinite(s.v))
+    changed = res.summary["continued_with_changes"][0]
+    assert changed["step"] == 4 and "PoisonForce" in changed["changes"][0]
 
 
 def s_n_fluid(scene: Scene) -> int:

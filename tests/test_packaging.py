@@ -3,12 +3,16 @@ built wheel (what `pip install .` installs) holds the shipped problems and the r
 
 from __future__ import annotations
 
+import json
+import os
 import shutil
 import subprocess
 import sys
 import tomllib
 import zipfile
 from pathlib import Path
+
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -33,19 +37,45 @@ def test_the_installed_problems_package_is_the_top_level_folder():
     assert Path(mlsgalerkin.problems.__file__).resolve().parent == ROOT / "problems"
 
 
-def test_wheel_holds_problems_and_reference_data(tmp_path):
-    """`pip install .` installs from this wheel: the problems under mlsgalerkin/problems and the
-    CSV files under mlsgalerkin/data. Built from a copy of the source tree (setuptools writes a
-    build/ folder next to the sources)."""
-    src = tmp_path / "src"
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory) -> Path:
+    """The wheel `pip install .` installs, built from a copy of the source tree (setuptools
+    writes a build/ folder next to the sources)."""
+    tmp = tmp_path_factory.mktemp("wheel")
+    src = tmp / "src"
     shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(".venv", ".git", "results", "build", "*.egg-info",
                                                               "__pycache__", ".pytest_cache", ".hypothesis"))
     done = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-w",
-                           str(tmp_path), str(src)], capture_output=True, text=True, timeout=600)
+                           str(tmp), str(src)], capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-2000:]
-    wheel = next(tmp_path.glob("mlsgalerkin-*.whl"))
+    return next(tmp.glob("mlsgalerkin-*.whl"))
+
+
+def test_wheel_holds_problems_and_reference_data(wheel):
+    """The problems under mlsgalerkin/problems and the CSV files under mlsgalerkin/data."""
     names = set(zipfile.ZipFile(wheel).namelist())
     for problem in ("hydrostatic", "dam_break", "gravity_current", "drop_impact", "wave_maker"):
         assert f"mlsgalerkin/problems/{problem}.py" in names
     assert "mlsgalerkin/data/martin_moyce_1952.csv" in names and "mlsgalerkin/data/README.md" in names
     assert not any(n.startswith("problems/") for n in names)
+
+
+def test_a_problem_runs_end_to_end_from_a_non_editable_install(wheel, tmp_path):
+    """Installed from the wheel (not editable), run from a directory far from the repository:
+    the dam break runs and its analysis reads the shipped Martin & Moyce data."""
+    target = tmp_path / "site"
+    done = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--quiet", "--target",
+                           str(target), str(wheel)], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    env = dict(os.environ, PYTHONPATH=str(target), NUMBA_NUM_THREADS="1")
+    where = subprocess.run([sys.executable, "-c", "import mlsgalerkin, mlsgalerkin.problems as p; "
+                            "print(mlsgalerkin.__file__); print(p.__file__)"], capture_output=True, text=True,
+                           cwd=tmp_path, env=env, timeout=120)
+    assert where.returncode == 0 and all(line.startswith(str(target)) for line in where.stdout.split()), where.stdout
+    run = subprocess.run([sys.executable, "-m", "mlsgalerkin", "run", "dam_break", "--dx", "0.0095", "--t-end", "0.08",
+                          "--out", "db", "--no-progress", "--no-gif"], capture_output=True, text=True, cwd=tmp_path,
+                         env=env, timeout=900)
+    assert run.returncode == 0, run.stderr[-3000:]
+    summary = json.loads((tmp_path / "db" / "summary.json").read_text())
+    assert summary["status"] == "completed" and summary["results"]["rms_deviation_Z"] > 0
+    assert "surge front" in run.stdout

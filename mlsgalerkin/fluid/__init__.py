@@ -26,7 +26,15 @@ Run a scene with :class:`mlsgalerkin.simulation.Simulation`; ready-made scenes l
 :mod:`mlsgalerkin.problems`.
 """
 
-from mlsgalerkin.fluid.bodies import FluidBody, Phase, WallBody, lattice, wall_box
+from mlsgalerkin.fluid.bodies import (
+    FluidBody,
+    ParticleLimitError,
+    Phase,
+    WallBody,
+    lattice,
+    particle_limit,
+    wall_box,
+)
 from mlsgalerkin.fluid.effect import Effect
 from mlsgalerkin.fluid.eos import (
     MachNumberWarning,
@@ -69,6 +77,7 @@ __all__ = [
     "MachNumberWarning",
     "MonaghanViscosity",
     "NewtonianViscosity",
+    "ParticleLimitError",
     "Phase",
     "PredictorCorrector",
     "TaitEOS",
@@ -81,6 +90,7 @@ __all__ = [
     "hydrostatic_density",
     "lattice",
     "pair_viscosity_limit",
+    "particle_limit",
     "tait_density",
     "tait_pressure",
     "tait_sound_speed",

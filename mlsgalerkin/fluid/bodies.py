@@ -16,6 +16,10 @@ and velocity are extrapolated from the fluid every step (see :mod:`mlsgalerkin.f
 
 from __future__ import annotations
 
+import contextlib
+import math
+from collections.abc import Iterator
+from contextvars import ContextVar
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -29,7 +33,35 @@ from mlsgalerkin.neighbors import as_coordinates
 #: The solver of fluid and wall bodies (resolved by the run loop; a string avoids an import cycle).
 FLUID_SOLVER = "mlsgalerkin.fluid.solver:FluidSolver"
 
-__all__ = ["Phase", "FluidBody", "WallBody", "lattice", "wall_box"]
+__all__ = ["FluidBody", "ParticleLimitError", "Phase", "WallBody", "lattice", "particle_limit", "wall_box"]
+
+#: The largest lattice :func:`lattice` builds in the current context (``None``: no limit).
+_LATTICE_LIMIT: ContextVar[int | None] = ContextVar("lattice_limit", default=None)
+
+
+class ParticleLimitError(ValueError):
+    """A lattice would hold more particles than the current :func:`particle_limit` allows."""
+
+
+def _check_limit(count: float, what: str, spacing: float) -> None:
+    """Raise :class:`ParticleLimitError` if ``count`` points exceed the current limit."""
+    limit = _LATTICE_LIMIT.get()
+    if limit is not None and count > limit:
+        raise ParticleLimitError(
+            f"{what} at spacing {spacing:g} m) would hold {count:.3g} particles, which exceeds the limit of "
+            f"{limit:.3g}; coarsen the spacing, or raise the limit (--max-particles) if the machine has the memory "
+            "and the time")
+
+
+@contextlib.contextmanager
+def particle_limit(n: int | None) -> Iterator[None]:
+    """Within the block, :func:`lattice` refuses (before allocating anything) to build more than
+    ``n`` points in one call; ``mlsgalerkin run`` sets it from ``--max-particles``."""
+    token = _LATTICE_LIMIT.set(n)
+    try:
+        yield
+    finally:
+        _LATTICE_LIMIT.reset(token)
 
 
 @dataclass(frozen=True)
@@ -55,11 +87,20 @@ def lattice(lower: ArrayLike, upper: ArrayLike, spacing: float) -> NDArray[np.fl
     """
     lo = np.asarray(lower, dtype=float)
     hi = np.asarray(upper, dtype=float)
-    if lo.shape != hi.shape or lo.ndim != 1 or not np.all(hi > lo):
-        raise ValueError(f"lattice: need lower < upper componentwise, got {lo} and {hi}")
-    if not spacing > 0:
-        raise ValueError(f"lattice: spacing must be positive, got {spacing}")
-    counts = np.maximum(np.round((hi - lo) / spacing).astype(int), 1)
+    if lo.shape != hi.shape or lo.ndim != 1 or not np.all(hi > lo) or not np.all(np.isfinite(hi - lo)):
+        raise ValueError(f"lattice: need finite lower < upper componentwise, got {lo} and {hi}")
+    if not (math.isfinite(spacing) and spacing > 0):
+        raise ValueError(f"lattice: spacing must be positive and finite, got {spacing}")
+    ratio = (hi - lo) / spacing
+    if np.any(ratio < 0.5):
+        a = int(np.argmin(ratio))
+        raise ValueError(
+            f"lattice: the spacing {spacing:g} m is larger than twice the box's size {hi[a] - lo[a]:g} m along "
+            f"axis {a}: not one particle fits; choose a spacing below {(hi[a] - lo[a]) / 2:g} m (a few particles "
+            "across the smallest feature)")
+    _check_limit(float(np.prod(np.maximum(np.round(ratio), 1.0))), f"a lattice (box {np.round(hi - lo, 6).tolist()} m",
+                 spacing)
+    counts = np.maximum(np.round(ratio).astype(int), 1)
     axes = [lo[a] + (np.arange(counts[a]) + 0.5) * spacing for a in range(lo.size)]
     grid = np.meshgrid(*axes, indexing="ij")
     return np.ascontiguousarray(np.stack([g.ravel() for g in grid], axis=1))
@@ -229,6 +270,11 @@ def wall_box(
         raise ValueError("wall_box is 2D: lower and upper must be (2,) points")
     if layers < 1:
         raise ValueError("wall_box: need at least one layer")
+    if not (math.isfinite(spacing) and spacing > 0) or not np.all(hi > lo) or not np.all(np.isfinite(hi - lo)):
+        raise ValueError(f"wall_box: need a positive spacing and lower < upper, got {spacing!r}, {lo}, {hi}")
+    size = (hi - lo) / spacing
+    _check_limit(layers * (2.0 * (size[0] + 2 * layers) + 2.0 * size[1]), f"a wall box ({np.round(hi - lo, 6).tolist()} m",
+                 spacing)
     # layers k = 0..layers-1 at (k + 1/2) spacing outside each side; the bottom (and top)
     # rows run under the side walls to fill the corners. Built side by side, so a box whose
     # size is not a multiple of the spacing still gets exactly `layers` layers everywhere.

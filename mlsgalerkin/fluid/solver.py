@@ -21,6 +21,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+import warnings
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -30,7 +31,9 @@ from mlsgalerkin.assembly import internal_force_and_mass, velocity_gradient_dive
 from mlsgalerkin.dynamics import Solver, Surface
 from mlsgalerkin.fluid.bodies import FluidBody, WallBody
 from mlsgalerkin.fluid.effect import SOLVER_QUANTITIES, STAGES, Effect
+from mlsgalerkin.fluid.geometry import geometry_problems
 from mlsgalerkin.fluid.integrators import make_integrator
+from mlsgalerkin.fluid.penetration import PENETRATION_WARNING, penetration_depths, surface_offsets
 from mlsgalerkin.fluid.mass import (
     MASS_OPTIONS,
     consistent_acceleration,
@@ -46,7 +49,11 @@ from mlsgalerkin.neighbors import find_neighbors
 if TYPE_CHECKING:  # pragma: no cover
     from mlsgalerkin.scene import Scene
 
-__all__ = ["FluidSolver", "StageTimer", "build_state"]
+__all__ = ["FluidSolver", "StageTimer", "WallPenetrationWarning", "build_state"]
+
+
+class WallPenetrationWarning(UserWarning):
+    """Fluid particles have crossed the first layer of a wall (see :mod:`mlsgalerkin.fluid.penetration`)."""
 
 logger = logging.getLogger(__name__)
 
@@ -150,6 +157,12 @@ class FluidSolver(Solver):
         out.extend(scene.approximation.problems())
         for w in (b for b in bodies if isinstance(b, WallBody) and b.motion is not None):
             out.extend(f"wall body {w.name!r}: {p}" for p in w.motion.check(w.dim))
+        if fluids and len({b.dim for b in bodies}) == 1:
+            g = next((np.asarray(e.g, dtype=float) for e in scene.effects
+                      if "gravity" in getattr(e, "provides", ()) and hasattr(e, "g")), None)
+            if g is not None and g.shape != (fluids[0].dim,):
+                g = None  # reported by the effect's own check
+            out.extend(geometry_problems(fluids, [b for b in bodies if isinstance(b, WallBody)], g))
 
         effects = list(scene.effects)
         for e in effects:
@@ -228,6 +241,12 @@ class FluidSolver(Solver):
                 wsl = slice(sl.start - s.n_fluid, sl.stop - s.n_fluid)
                 n0 = w.normals if w.normals is not None else np.zeros_like(w.positions)
                 self._moving.append((sl, wsl, w.motion, w.positions.copy(), np.asarray(n0, dtype=float).copy()))
+        # wall penetration is measured where every wall body has normals (its surface is known)
+        self._offsets = None
+        if self.walls and all(w.normals is not None for w in self.walls):
+            self._offsets = np.concatenate([surface_offsets(w.positions, np.asarray(w.normals, dtype=float), w.spacing)
+                                            for w in self.walls])
+        self.penetration = {"max_depth_dx": 0.0, "max_count": 0, "time_of_max_depth_s": None, "warned": False}
         for e in self.effects:
             e.setup(s, scene)
         s.c = s.c if s.c is not None else np.zeros(s.n)
@@ -374,6 +393,8 @@ class FluidSolver(Solver):
         """First force evaluation at ``t = 0`` (rates for the first kick, ``dt_next``)."""
         s = self._state
         self.evaluate()
+        if self._offsets is not None:
+            self._measure_penetration()
         s.dt_next = self.time_step_limit()
         self.started = True
 
@@ -394,7 +415,34 @@ class FluidSolver(Solver):
         for e in self._stage_effects["after_step"]:
             e.after_step(s)
             t0 = self.timer.add(e.name, t0)
+        if self._offsets is not None:
+            self._measure_penetration()
+            self.timer.add("wall_penetration", t0)
         s.dt_next = self.time_step_limit()
+
+    def _measure_penetration(self) -> None:
+        """Count the fluid particles behind a wall surface and the deepest; warn once past
+        :data:`~mlsgalerkin.fluid.penetration.PENETRATION_WARNING` spacings."""
+        s = self._state
+        nb = s.neighbors
+        depth = penetration_depths(nb.indptr, nb.indices, s.x, s.n_fluid, s.wall_normals, self._offsets)
+        deepest = float(depth.max()) / s.spacing if depth.size else 0.0
+        count = int(np.count_nonzero(depth > 0.0))
+        s.wall_penetrations, s.max_wall_penetration_dx = count, deepest
+        rec = self.penetration
+        rec["max_count"] = max(rec["max_count"], count)
+        if deepest > rec["max_depth_dx"]:
+            rec["max_depth_dx"], rec["time_of_max_depth_s"] = deepest, s.t
+        if deepest > PENETRATION_WARNING and not rec["warned"]:
+            rec["warned"] = True
+            k = int(np.argmax(depth))
+            body = next((name for name, sl in s.bodies.items() if sl.start <= k < sl.stop), "?")
+            warnings.warn(
+                f"at t = {s.t:.6g} s, {count} fluid particles are behind wall surfaces, the deepest (particle {k} of "
+                f"body {body!r} at {np.round(s.x[k], 6).tolist()}) {deepest:.2f} spacings behind, past the first layer "
+                f"of wall particles (threshold {PENETRATION_WARNING} spacings): the walls are leaking. Refine the "
+                "resolution or lower the time step; the columns wall_penetrations and max_wall_penetration_dx of "
+                "timeseries.csv follow it", WallPenetrationWarning, stacklevel=2)
 
     def surface(self, body: str) -> Surface:
         """A fluid body's particles as slave nodes (positions, velocities, masses)."""
@@ -428,6 +476,8 @@ class FluidSolver(Solver):
             "counters": {"fallback_points": self.fallback_points, "fallback_steps": self.fallback_steps,
                          "mass_floored": self.mass_floored, "neighbor_builds": self.neighbor_builds,
                          "consistent_mass_unconverged": self.consistent_mass_unconverged},
+            "penetration": dict(self.penetration),
+            "wall_penetration_now": [s.wall_penetrations, s.max_wall_penetration_dx],
         }
         return arrays, meta
 
@@ -454,6 +504,8 @@ class FluidSolver(Solver):
         self.fallback_points, self.fallback_steps = c["fallback_points"], c["fallback_steps"]
         self.mass_floored, self.neighbor_builds = c["mass_floored"], c["neighbor_builds"]
         self.consistent_mass_unconverged = c.get("consistent_mass_unconverged", 0)
+        self.penetration = dict(meta.get("penetration", self.penetration))
+        s.wall_penetrations, s.max_wall_penetration_dx = meta.get("wall_penetration_now", [0, 0.0])
         # wall velocities, accelerations and normals of the checkpoint's time (the positions
         # are in the checkpoint)
         x_walls = s.x.copy()
@@ -491,4 +543,6 @@ class FluidSolver(Solver):
                 "momentum": s.momentum().tolist(),
             },
             "effect_reports": {e.name: to_jsonable(e.summary()) for e in self.effects if e.summary()},
+            "wall_penetration": (dict(self.penetration, threshold_dx=PENETRATION_WARNING)
+                                 if self._offsets is not None else None),
         }

@@ -85,6 +85,8 @@ class FluidState:
     mass: NDArray[np.float64] | None = None
     volume: NDArray[np.float64] | None = None
     fallback_count: int = 0
+    wall_penetrations: int | None = None
+    max_wall_penetration_dx: float | None = None
     extra: dict[str, NDArray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -164,6 +166,9 @@ class FluidState:
         row["min_density_ratio"] = float(ratio.min()) if ratio.size else 1.0
         row["max_density_ratio"] = float(ratio.max()) if ratio.size else 1.0
         row["fallback_points"] = int(self.fallback_count)
+        if self.wall_penetrations is not None:
+            row["wall_penetrations"] = int(self.wall_penetrations)
+            row["max_wall_penetration_dx"] = float(self.max_wall_penetration_dx)
         return row
 
     def frame(self) -> tuple[NDArray[np.float64], dict[str, NDArray]]:

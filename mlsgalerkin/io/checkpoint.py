@@ -41,6 +41,7 @@ __all__ = [
     "CHECKPOINT_VERSION",
     "CheckpointError",
     "checkpoint_path",
+    "checkpoints_newest_first",
     "latest_checkpoint",
     "load_checkpoint",
     "prune_checkpoints",
@@ -154,6 +155,12 @@ def _checkpoints(directory: Path) -> list[tuple[int, Path]]:
         if m and p.is_file():
             found.append((int(m.group(1)), p))
     return sorted(found)
+
+
+def checkpoints_newest_first(directory: str | Path) -> list[Path]:
+    """The files ``checkpoint_{step:08d}.npz`` in ``directory``, highest step first (none if the
+    directory does not exist); the files are not opened."""
+    return [p for _, p in reversed(_checkpoints(Path(directory)))]
 
 
 def latest_checkpoint(directory: str | Path) -> Path | None:

@@ -32,6 +32,7 @@ __all__ = [
     "atomic_write",
     "csv_text",
     "format_cell",
+    "read_json_file",
     "to_jsonable",
     "write_csv_rows",
     "write_json",
@@ -145,3 +146,15 @@ def to_jsonable(v):
 def write_json(path: str | Path, data: dict) -> Path:
     """Atomic, indented JSON of :func:`to_jsonable` ``(data)``."""
     return atomic_write(path, json.dumps(to_jsonable(data), indent=2, ensure_ascii=False) + "\n")
+
+
+def read_json_file(path: str | Path) -> dict:
+    """The JSON object in ``path``; ValueError (naming the file) if it is not one."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{path} is not valid JSON ({exc})") from exc
+    if not isinstance(data, dict):
+        raise ValueError(f"{path} does not hold a JSON object")
+    return data
