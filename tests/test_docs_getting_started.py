@@ -57,3 +57,36 @@ def test_the_demos_numbers_are_the_validation_runs():
 def test_links_resolve():
     assert not missing_links(PAGE), missing_links(PAGE)
     assert not missing_links(README), missing_links(README)
+
+
+def _commands(page: Path) -> list[str]:
+    """The ``mlsgalerkin ...`` lines of the page's bash blocks, comments dropped and optional
+    ``[...]`` arguments spelled out."""
+    out = []
+    for block in re.findall(r"```bash\n(.*?)```", page.read_text(encoding="utf-8"), flags=re.S):
+        for line in block.splitlines():
+            line = line.split("#", 1)[0].strip()
+            if line.startswith("mlsgalerkin "):
+                out.append(re.sub(r"\[([^\]]+)\]", r"\1", line))
+    return out
+
+
+def test_every_command_shown_parses_and_names_real_problems_and_parameters():
+    """Each ``mlsgalerkin`` command of the README and the getting-started page is accepted by
+    the command line, and a ``run`` names a shipped problem (or a user's file) and parameters
+    that problem has."""
+    import shlex
+
+    from mlsgalerkin.cli import _parse_sets, build_parser
+    from mlsgalerkin.problem import load_problem, parse_overrides
+
+    commands = _commands(README) + _commands(PAGE)
+    assert len(commands) >= 8
+    parser = build_parser()
+    for command in commands:
+        args = parser.parse_args(shlex.split(command)[1:])
+        if args.command == "run" and not args.problem.endswith(".py"):
+            mod = load_problem(ROOT / "problems" / f"{args.problem}.py")
+            parse_overrides(mod.Parameters, _parse_sets(args.set or []))
+        if args.command == "problems" and args.problem:
+            load_problem(ROOT / "problems" / f"{args.problem}.py")
