@@ -21,7 +21,7 @@ README = ROOT / "README.md"
 def _demo_recipe() -> list[str]:
     """The argument list of the ``demo`` target's command (after the interpreter)."""
     text = (ROOT / "Makefile").read_text(encoding="utf-8")
-    recipe = re.search(r"^demo:.*\n\t(.+)$", text, flags=re.M).group(1).split()
+    recipe = re.search(r"^demo:.*\n\t(.+)$", text, flags=re.MULTILINE).group(1).split()
     assert recipe[0] == "$(PY)" and recipe[1:3] == ["-m", "mlsgalerkin.cli"]
     return recipe[3:]
 
@@ -63,7 +63,7 @@ def _commands(page: Path) -> list[str]:
     """The ``mlsgalerkin ...`` lines of the page's bash blocks, comments dropped and optional
     ``[...]`` arguments spelled out."""
     out = []
-    for block in re.findall(r"```bash\n(.*?)```", page.read_text(encoding="utf-8"), flags=re.S):
+    for block in re.findall(r"```bash\n(.*?)```", page.read_text(encoding="utf-8"), flags=re.DOTALL):
         for line in block.splitlines():
             line = line.split("#", 1)[0].strip()
             if line.startswith("mlsgalerkin "):
