@@ -3,7 +3,7 @@
 One fluid-step's worth of assembly on a shape table that is already built: the internal-force
 scatter ``f_i = -Σ_k σ_k ∇N_i(x_k) V_k`` (numba, per-thread accumulators) and the collocated
 continuity rate ``dρ_k/dt = -ρ_k tr Σ_j v_j ⊗ ∇N_j(x_k)``. 2D jittered lattice, cubic spline,
-linear basis, ``h = 1.2 dx`` (about 21 neighbours). Goal (issue #3): ≥ 1e6 points/s with 2
+linear basis, ``h = 1.2 dx`` (about 21 neighbours). Goal (this project's): ≥ 1e6 points/s with 2
 threads, per-point cost flat from 1e4 to 1e6. Timings are reported, never asserted.
 
 Run alone::

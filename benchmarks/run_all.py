@@ -322,7 +322,7 @@ def write_report(out: Path, prov: dict, nb_rows: list[dict], sf_rows: list[dict]
         md += ["", "## Galerkin assembly (internal force + continuity rate)", "",
                "`assembly.internal_force(table, stress, volume)` plus",
                "`assembly.continuity_rate(table, velocity, rho)` on a built 2D linear shape table:",
-               "the Galerkin part of one fluid step (issue #3 goal: ≥ 10⁶ points/s).", ""]
+               "the Galerkin part of one fluid step (goal: ≥ 10⁶ points/s).", ""]
         md += _table(asm_rows, extra=False)
     if fluid_rows:
         md += ["", "## Fluid time step (2D dam break)", "",

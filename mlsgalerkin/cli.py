@@ -76,16 +76,33 @@ def _parse_sets(items: list[str]) -> dict[str, str]:
 
 
 def _cmd_problems(args: argparse.Namespace) -> int:
-    import dataclasses
+    import textwrap
 
-    from mlsgalerkin.problem import load_problem, shipped_problems
+    from mlsgalerkin.problem import (
+        ProblemError,
+        load_problem,
+        parameter_table,
+        problem_description,
+        shipped_problems,
+    )
 
-    for name in shipped_problems():
-        mod = load_problem(name)
-        print(f"{name}: {(mod.__doc__ or '').strip().splitlines()[0]}")
-        for f in dataclasses.fields(mod.Parameters):
-            print(f"    {f.name:<20} = {f.default!r}")
-    print("\nRun one with `mlsgalerkin run NAME`, or your own problem file with `mlsgalerkin run my_case.py`.")
+    try:
+        names = [args.problem] if args.problem else list(shipped_problems())
+        chosen = [(name, load_problem(name)) for name in names]
+    except ProblemError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    for k, (name, mod) in enumerate(chosen):
+        print(("\n" if k else "") + textwrap.fill(f"{name}: {problem_description(mod)}", 100,
+                                                  subsequent_indent="    "))
+        print(textwrap.indent(parameter_table(mod.Parameters, width=96), "    "))
+    if args.problem:
+        copy = " (copy it to start your own case)" if args.problem in shipped_problems() else ""
+        print(f"\nfile: {chosen[0][1].__file__}{copy}")
+        print(f"Run it with `mlsgalerkin run {args.problem} --set PARAMETER=VALUE`.")
+    else:
+        print("\nRun one with `mlsgalerkin run NAME --set PARAMETER=VALUE`, your own problem file with\n"
+              "`mlsgalerkin run my_case.py`; `mlsgalerkin problems NAME` shows one problem and its file.")
     return 0
 
 
@@ -212,7 +229,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("kernels", help="list the kernels with support, constants and smoothness")
     p.set_defaults(func=_cmd_kernels)
 
-    p = sub.add_parser("problems", help="list the runnable problems and their parameters")
+    p = sub.add_parser("problems", help="list the runnable problems and their parameters (default, unit, "
+                                        "meaning)")
+    p.add_argument("problem", nargs="?", help="show only this problem (a shipped name or your problem "
+                                              "file) with its description")
     p.set_defaults(func=_cmd_problems)
 
     p = sub.add_parser("run", help="run a problem: mlsgalerkin run gravity_current --set depth=0.1 --dx 0.002")

@@ -4,7 +4,7 @@ Every kernel is written
 
 .. math:: W(r, h) = \frac{\alpha_d}{h^d} f(q), \qquad q = r / h,
 
-with compact support ``q < support`` (the :math:`\kappa` of the sources) and the normalisation
+with compact support ``q < support`` (the :math:`\kappa` of Liu & Liu 2003 and Xing 2019) and the normalisation
 constant :math:`\alpha_d` that makes :math:`\int W\,dV = 1` in ``d`` dimensions. MLS and RKPM
 shape functions do not need :math:`\alpha_d` (it cancels), SPH sums do.
 
@@ -214,7 +214,7 @@ class Kernel:
     ----------
     name : registry name, e.g. ``"cubic_spline"``.
     kernel_id : integer used by compiled code (:func:`kernel_f_df`).
-    support : support radius in units of ``h`` (the sources' kappa).
+    support : support radius in units of ``h`` (kappa in Liu & Liu 2003 and Xing 2019).
     alpha : normalisation constants ``(alpha_1, alpha_2, alpha_3)``.
     smoothness : continuity of ``W`` as a function of position, in words.
     nonnegative : False where ``f`` changes sign inside the support (super-Gaussian): such a

@@ -4,7 +4,9 @@ A problem module — a shipped one in :mod:`mlsgalerkin.problems`, or any ``my_c
 user's — defines:
 
 ``Parameters``
-    a dataclass of named parameters with defaults (units in the comments);
+    a dataclass of named parameters with defaults, each field documented by a ``#:`` comment
+    that ends with its unit in parentheses, ``dx: float = 0.01  #: particle spacing (m)``
+    (:func:`parameter_help` reads them; ``mlsgalerkin problems`` prints them);
 ``make_scene(params) -> Scene``
     the scene for those parameters;
 ``analyse(result, params) -> dict`` (optional)
@@ -23,25 +25,34 @@ as the starting point of your own case.
 
 from __future__ import annotations
 
+import ast
 import dataclasses
 import hashlib
 import importlib
 import importlib.util
+import inspect
+import io
 import math
 import re
 import sys
+import textwrap
+import tokenize
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import Any, NamedTuple
 
 __all__ = [
     "DEFAULT_MAX_PARTICLES",
+    "ParameterHelp",
     "PreparedProblem",
     "ProblemError",
     "load_problem",
     "origin_of",
+    "parameter_help",
+    "parameter_table",
     "parse_overrides",
     "prepare_problem",
+    "problem_description",
     "require",
     "require_nonnegative",
     "require_positive",
@@ -306,3 +317,152 @@ def run_problem(problem: str | Path | ModuleType, overrides: dict[str, Any] | No
         out=out, progress=progress, restart=restart, overwrite=overwrite, allow_changes=allow_changes,
         origin=prepared.origin, analyse=(lambda r: analyse(r, params)) if analyse else None)
     return result, result.results or {}
+
+
+# ------------------------------------------------------------------ parameter help
+class ParameterHelp(NamedTuple):
+    """One field of a ``Parameters`` dataclass: its name, default, unit and meaning.
+
+    ``unit`` and ``meaning`` are empty strings where the field has no ``#:`` comment (or the
+    class's source cannot be read); ``default`` is :data:`dataclasses.MISSING` for a field
+    without a default.
+    """
+
+    name: str
+    default: Any
+    unit: str
+    meaning: str
+
+
+_UNIT = re.compile(r"^(?P<meaning>.*?)\s*\((?P<unit>[^()]*)\)\s*$", flags=re.DOTALL)
+
+
+def split_unit(comment: str) -> tuple[str, str]:
+    """``(meaning, unit)`` of a parameter comment ``"meaning (unit)"``: the unit is the last
+    parenthesised group, which must close the comment and be a short word or symbol (at most
+    15 characters); otherwise the unit is ``""`` and the whole comment is the meaning.
+
+    >>> split_unit("sound speed / sqrt(2 g H) (–)")
+    ('sound speed / sqrt(2 g H)', '–')
+    >>> split_unit("end time; T = 3 at 0.162 s (s)"), split_unit("no unit given")
+    (('end time; T = 3 at 0.162 s', 's'), ('no unit given', ''))
+    """
+    text = " ".join(comment.split())
+    m = _UNIT.match(text)
+    unit = m.group("unit").strip() if m else ""
+    if not unit or len(unit) > 15:
+        return text, ""
+    return m.group("meaning").rstrip(" ;,:"), unit
+
+
+def _field_comments(cls: type) -> dict[str, str]:
+    """The ``#:`` comment of each field defined in the body of ``cls``: on the field's last line
+    (after the value) or, failing that, the ``#:`` lines directly above it (Sphinx's two forms)."""
+    try:
+        source = textwrap.dedent(inspect.getsource(cls))
+    except (OSError, TypeError):  # defined interactively, or no source file
+        return {}
+    try:
+        tree = ast.parse(source)
+        tokens = list(tokenize.generate_tokens(io.StringIO(source).readline))
+    except (SyntaxError, tokenize.TokenError):
+        return {}
+    trailing: dict[int, str] = {}
+    alone: dict[int, str] = {}
+    for tok in tokens:
+        if tok.type == tokenize.COMMENT and tok.string.startswith("#:"):
+            row, col = tok.start
+            text = tok.string[2:].strip()
+            (alone if tok.line[:col].strip() == "" else trailing)[row] = text
+    body = tree.body[0].body if tree.body and isinstance(tree.body[0], ast.ClassDef) else []
+    out: dict[str, str] = {}
+    for node in body:
+        if not (isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name)):
+            continue
+        if node.end_lineno in trailing:
+            out[node.target.id] = trailing[node.end_lineno]
+            continue
+        lines, row = [], node.lineno - 1
+        while row in alone:
+            lines.insert(0, alone[row])
+            row -= 1
+        if lines:
+            out[node.target.id] = " ".join(lines)
+    return out
+
+
+def parameter_help(params_cls: type) -> list[ParameterHelp]:
+    """Name, default, unit and meaning of every field of the dataclass ``params_cls``, in field
+    order, read from the fields' ``#: meaning (unit)`` comments.
+
+    The comment follows the field on its line (or stands on the lines directly above it); the
+    unit is the parenthesised group that ends the comment: ``(m)``, ``(kg/m³)``, ``(–)`` for a
+    dimensionless number, ``(bool)`` for a switch, ``(choice)`` for one of the named options
+    the meaning lists. Fields inherited from a dataclass base get that base's comments.
+    """
+    if not (isinstance(params_cls, type) and dataclasses.is_dataclass(params_cls)):
+        raise ProblemError(f"parameter_help needs a dataclass (a problem's Parameters), "
+                           f"got {params_cls!r}")
+    comments: dict[str, str] = {}
+    for base in reversed(params_cls.__mro__):
+        if dataclasses.is_dataclass(base) and "__annotations__" in vars(base):
+            comments.update(_field_comments(base))
+    out = []
+    for f in dataclasses.fields(params_cls):
+        if f.default is not dataclasses.MISSING:
+            default = f.default
+        elif f.default_factory is not dataclasses.MISSING:
+            default = f.default_factory()
+        else:
+            default = dataclasses.MISSING
+        meaning, unit = split_unit(comments.get(f.name, ""))
+        out.append(ParameterHelp(f.name, default, unit, meaning))
+    return out
+
+
+def _show_default(value: Any) -> str:
+    if value is dataclasses.MISSING:
+        return "(required)"
+    if isinstance(value, float):
+        text = repr(value)
+        return text if len(text) <= 10 else format(value, ".6g")
+    if isinstance(value, tuple):
+        return ",".join(_show_default(v) for v in value)  # as --set NAME=1,2 reads it
+    return str(value)
+
+
+def parameter_table(params_cls: type, width: int = 100) -> str:
+    """The fields of ``params_cls`` as a plain-text table: name, default (as ``--set`` takes
+    it), unit, meaning (wrapped to ``width`` characters; ``?`` where a field has no comment)."""
+    rows = [(h.name, _show_default(h.default), h.unit or "?", h.meaning or "?")
+            for h in parameter_help(params_cls)]
+    head = ("parameter", "default", "unit", "meaning")
+    w = [max(len(r[k]) for r in [head, *rows]) for k in range(3)]
+    indent = sum(w) + 6
+    lines = []
+    for r in [head, *rows]:
+        wrapped = textwrap.wrap(r[3], max(width - indent, 30)) or [""]
+        lines.append(f"{r[0]:<{w[0]}}  {r[1]:<{w[1]}}  {r[2]:<{w[2]}}  {wrapped[0]}")
+        lines += [" " * indent + more for more in wrapped[1:]]
+    lines.insert(1, "-" * max(len(line) for line in lines))
+    return "\n".join(line.rstrip() for line in lines)
+
+
+def _plain(text: str) -> str:
+    """reStructuredText inline markup as plain text: literals and cross-references unwrapped.
+
+    >>> _plain("a :class:`~mlsgalerkin.fluid.WallBody` moving with ``X(t)``")
+    'a WallBody moving with X(t)'
+    """
+    def role(m: re.Match) -> str:
+        return m.group(2).rsplit(".", 1)[-1] if m.group(1) else m.group(2)
+
+    text = re.sub(r":\w+:`(~?)([^`]+)`", role, text)
+    return text.replace("``", "")
+
+
+def problem_description(mod: ModuleType) -> str:
+    """The first paragraph of a problem module's docstring, as plain text on one line."""
+    doc = inspect.cleandoc(mod.__doc__ or "")
+    first = doc.split("\n\n", 1)[0]
+    return _plain(" ".join(first.split()))

@@ -35,17 +35,17 @@ INCH = 0.0254
 
 @dataclass(frozen=True)
 class Parameters:
-    column_width: float = 2.25 * INCH   #: a (m); the column is a wide and 2a high
+    column_width: float = 2.25 * INCH   #: column width a; the column is a wide and 2a high (m)
     dx: float = 2.25 * INCH / 40        #: particle spacing (m)
-    t_end: float = 0.17                 #: end time (s); T = 3 at 0.162 s for a = 2.25 in
-    tank_length_factor: float = 5.5     #: tank length / a
+    t_end: float = 0.17                 #: end time; T = 3 at 0.162 s for a = 2.25 in (s)
+    tank_length_factor: float = 5.5     #: tank length / a (–)
     rho: float = 1000.0                 #: water density (kg/m³)
-    alpha: float = 0.05                 #: Monaghan artificial viscosity
-    h_factor: float = 1.3               #: h / dx
-    c0_factor: float = 10.0             #: c0 / sqrt(2 g h)
-    g: float = 9.81                     #: gravity (m/s²)
-    frame_every: float = 0.01           #: seconds between VTU frames
-    gif: bool = False                   #: render animation.gif
+    alpha: float = 0.05                 #: Monaghan artificial viscosity α (–)
+    h_factor: float = 1.3               #: smoothing length / particle spacing, h/dx (–)
+    c0_factor: float = 10.0             #: sound speed / sqrt(2 g · 2a), c0 over the fall speed (–)
+    g: float = 9.81                     #: gravitational acceleration (m/s²)
+    frame_every: float = 0.01           #: time between VTU frames (s)
+    gif: bool = False                   #: render animation.gif and final.png (bool)
 
 
 def make_scene(p: Parameters = Parameters()) -> Scene:

@@ -35,19 +35,19 @@ SMOKE = {"dx": 0.004, "t_end": 0.01}
 
 @dataclass(frozen=True)
 class Parameters:
-    drop_diameter: float = 0.02    #: m
-    pool_width: float = 0.12       #: m
-    pool_depth: float = 0.043      #: m
-    speed: float = 2.0             #: impact speed (m/s), downwards
-    rho: float = 1000.0            #: kg/m³
-    viscosity: float = 0.5         #: Pa s
-    dx: float = 0.001              #: m
-    t_end: float = 0.16            #: s
-    c0_factor: float = 10.0        #: c0 / speed
-    alpha: float = 0.05            #: Monaghan artificial viscosity
-    h_factor: float = 1.3          #: h / dx
-    g: float = 9.81                #: m/s²
-    gif: bool = True               #: render animation.gif and final.png
+    drop_diameter: float = 0.02    #: drop diameter (m)
+    pool_width: float = 0.12       #: pool width, wall to wall (m)
+    pool_depth: float = 0.043      #: still-liquid depth of the pool (m)
+    speed: float = 2.0             #: impact speed of the drop, downwards (m/s)
+    rho: float = 1000.0            #: liquid density (kg/m³)
+    viscosity: float = 0.5         #: dynamic viscosity of the liquid (Pa s)
+    dx: float = 0.001              #: particle spacing (m)
+    t_end: float = 0.16            #: end time (s)
+    c0_factor: float = 10.0        #: sound speed / impact speed (–)
+    alpha: float = 0.05            #: Monaghan artificial viscosity α (–)
+    h_factor: float = 1.3          #: smoothing length / particle spacing, h/dx (–)
+    g: float = 9.81                #: gravitational acceleration (m/s²)
+    gif: bool = True               #: render animation.gif and final.png (bool)
 
 
 def internal_energy(s, n: int, c0: float, gamma: float = 7.0) -> float:

@@ -46,20 +46,20 @@ SMOKE = {"dx": 0.006, "t_end": 0.05}
 @dataclass(frozen=True)
 class Parameters:
     depth: float = 0.06            #: tank depth D (m)
-    length: float = 0.34           #: tank length (m); the lock is at mid-length
-    rho_light: float = 1000.0      #: left fluid density (kg/m³)
-    rho_heavy: float = 1500.0      #: right fluid density (kg/m³)
-    viscosity: float = 1.0e-3      #: dynamic viscosity of both fluids (Pa s); 0 drops the effect
+    length: float = 0.34           #: tank length; the lock is at mid-length (m)
+    rho_light: float = 1000.0      #: density of the light fluid, left of the lock (kg/m³)
+    rho_heavy: float = 1500.0      #: density of the heavy fluid, right of the lock (kg/m³)
+    viscosity: float = 1.0e-3      #: dynamic viscosity of both fluids; 0 drops the effect (Pa s)
     dx: float = 0.003              #: particle spacing (m)
     t_end: float = 0.8             #: end time (s)
     c0: float = 10.0               #: sound speed (m/s)
-    alpha: float = 0.1             #: Monaghan artificial viscosity
-    h_factor: float = 1.3          #: h / dx
-    g: float = 9.81                #: gravity (m/s²)
-    slip: str = "free_slip"        #: wall condition: free_slip, no_slip or fixed
-    lid: bool = True               #: rigid lid at the initial surface (False: free surface)
-    frame_every: float = 0.02      #: seconds between VTU frames
-    gif: bool = True               #: render animation.gif
+    alpha: float = 0.1             #: Monaghan artificial viscosity α (–)
+    h_factor: float = 1.3          #: smoothing length / particle spacing, h/dx (–)
+    g: float = 9.81                #: gravitational acceleration (m/s²)
+    slip: str = "free_slip"        #: wall condition: free_slip, no_slip or fixed (choice)
+    lid: bool = True               #: rigid lid at the initial surface; false: free surface (bool)
+    frame_every: float = 0.02      #: time between VTU frames (s)
+    gif: bool = True               #: render animation.gif and final.png (bool)
 
 
 def reference_head_speed(p: Parameters) -> float:

@@ -33,13 +33,13 @@ class Parameters:
     dx: float = 0.01            #: particle spacing (m)
     t_end: float = 2.0          #: end time (s)
     rho: float = 1000.0         #: water density (kg/m³)
-    alpha: float = 0.2          #: Monaghan artificial viscosity (0.1 lets a lattice shear mode grow at dx = 0.01 after 1.4 s)
-    c0_factor: float = 10.0     #: c0 / sqrt(2 g H)
-    h_factor: float = 1.3       #: h / dx
-    g: float = 9.81             #: gravity (m/s²)
-    slip: str = "free_slip"     #: wall condition
-    frame_every: float = 0.1    #: seconds between VTU frames
-    gif: bool = False           #: render animation.gif
+    alpha: float = 0.2          #: Monaghan artificial viscosity α; 0.1 let a lattice shear mode grow at dx = 0.01 after 1.4 s (–)
+    c0_factor: float = 10.0     #: sound speed / sqrt(2 g H) (–)
+    h_factor: float = 1.3       #: smoothing length / particle spacing, h/dx (–)
+    g: float = 9.81             #: gravitational acceleration (m/s²)
+    slip: str = "free_slip"     #: wall condition: free_slip, no_slip or fixed (choice)
+    frame_every: float = 0.1    #: time between VTU frames (s)
+    gif: bool = False           #: render animation.gif and final.png (bool)
 
 
 def make_scene(p: Parameters = Parameters()) -> Scene:

@@ -61,14 +61,14 @@ class Parameters:
     tank_length: float = 4.0        #: distance from the paddle to the far wall (m)
     dx: float = 0.01                #: particle spacing (m)
     t_end: float = 7.0              #: end time (s)
-    ramp_periods: float = 2.0       #: periods over which the paddle is switched on
-    alpha: float = 0.1              #: Monaghan artificial viscosity (0.02 let a lattice mode grow)
-    c0_factor: float = 10.0         #: c0 / sqrt(g d)
-    h_factor: float = 1.3           #: h / dx
-    g: float = 9.81                 #: gravity (m/s²)
-    probe_every: float = 0.01       #: seconds between time-series rows
-    frame_every: float = 0.25       #: seconds between VTU frames
-    gif: bool = False               #: render animation.gif
+    ramp_periods: float = 2.0       #: paddle periods over which the paddle is switched on (–)
+    alpha: float = 0.1              #: Monaghan artificial viscosity α; 0.02 let a lattice mode grow (–)
+    c0_factor: float = 10.0         #: sound speed / sqrt(g d) (–)
+    h_factor: float = 1.3           #: smoothing length / particle spacing, h/dx (–)
+    g: float = 9.81                 #: gravitational acceleration (m/s²)
+    probe_every: float = 0.01       #: time between time-series rows (s)
+    frame_every: float = 0.25       #: time between VTU frames (s)
+    gif: bool = False               #: render animation.gif and final.png (bool)
 
 
 def wave_number(period: float, depth: float, g: float = 9.81) -> float:

@@ -191,7 +191,7 @@ def test_cli_writes_the_tables_plot_and_key_numbers(tmp_path, capsys, quick):
 @pytest.mark.parametrize("kernel", ["cubic_spline", "quartic_spline"])
 @pytest.mark.parametrize("function", ["x^3", "exp(-x)", "sin(x)"])
 def test_integral_approximation_is_second_order_in_h(quick, kernel, function):
-    """Seed §9.9: slope β ≈ 2 (here within [1.6, 2.4]) with N_nb = 100, interior points."""
+    """Xing (2019), claim (a): slope β ≈ 2 (here within [1.6, 2.4]) with N_nb = 100, interior points."""
     _, rows, fits = quick
     series = _sel(
         rows,
@@ -233,7 +233,7 @@ def _five_neighbour_errors(rows, kernel):
 
 @pytest.mark.parametrize("kernel", [k for k in SPH_STUDY_KERNELS if k != "johnson_quadratic"])
 def test_five_neighbours_give_under_5_percent(quick, kernel):
-    """Seed §9.9: < 5 % with 5 neighbours at h = 0.1 for F1-F4 (integral, interior)."""
+    """Xing (2019), claim (b): < 5 % with 5 neighbours at h = 0.1 for F1-F4 (integral, interior)."""
     errs = _five_neighbour_errors(quick[1], kernel)
     assert set(errs) >= set(ks.CLAIM_FUNCTIONS)
     for f in ks.CLAIM_FUNCTIONS:
@@ -255,7 +255,7 @@ def test_johnson_quadratic_misses_5_percent_because_of_its_cusp(quick):
 
 
 def test_particle_sum_reproduces_linear_in_the_interior(quick):
-    """Seed §9.9: the normalised sum reproduces F1 = x to round-off on a uniform lattice."""
+    """The Shepard-normalised particle sum reproduces F1 = x to round-off on a uniform lattice."""
     rs = _sel(quick[1], part="sph", approximation="particle", function="x", region="interior")
     assert len(rs) >= len(SPH_STUDY_KERNELS) * 10
     assert max(_num(r["error_abs"]) for r in rs) < 1e-12

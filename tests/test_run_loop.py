@@ -4,7 +4,7 @@ A toy body kind defined here — point masses advanced by their own sub-cycled v
 integrator — runs through :class:`~mlsgalerkin.simulation.Simulation` next to a fluid body;
 an interaction reads the surfaces of a point mass and of the fluid and returns equal and
 opposite forces to both. This is the shape of the scikit-fem structures, rigid bodies and
-penalty contact of the coming issues.
+penalty contact that come next (not built yet).
 """
 
 from __future__ import annotations

@@ -240,7 +240,7 @@ def summary_md(rows: list[dict], quick: bool) -> str:
     hs = [r for r in rows if r["problem"] == "hydrostatic"]
     if hs:
         lines += ["## Hydrostatic tank", "", "Tolerance: RMS pressure error after settling below 2 % of ρ0 g H "
-                  "(acceptance of the issue); the kinetic energy of the last quarter below that of the first "
+                  "(this project's acceptance criterion); the kinetic energy of the last quarter below that of the first "
                   "quarter; no particle outside the tank.", "",
                   "| case | p RMS error | KE max early (J) | KE max late (J) | wall crossings | pass |", "|---|---:|---:|---:|---:|---|"]
         for r in hs:
@@ -271,7 +271,7 @@ def summary_md(rows: list[dict], quick: bool) -> str:
         lines += ["## Gravity current (Cueto-Felgueroso et al. 2005)", "",
                   "Head speed from a straight-line fit of the head position over 20–80 % of the lock-to-wall "
                   "distance. Reference: 0.4 sqrt(g D Δρ/ρ0) (Rottman & Simpson 1983 as quoted by Cueto-Felgueroso et al. 2005; 0.217 m/s at the "
-                  "default). Tolerance of the issue: 10 %. Froude number Fr = v / sqrt(g D Δρ/ρ0); the "
+                  "default). Tolerance (this project's choice): 10 %. Froude number Fr = v / sqrt(g D Δρ/ρ0); the "
                   "energy-conserving (inviscid) value for a half-depth current is 0.5 (Benjamin 1968).", "",
                   "| case | rows per depth | head speed (m/s) | reference (m/s) | rel. error | Fr | fit r² | within 10 % |",
                   "|---|---:|---:|---:|---:|---:|---:|---|"]

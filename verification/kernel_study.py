@@ -1,8 +1,8 @@
 """Kernel accuracy study (Xing 2019, §12.2.3) and its MLS/RKPM/Shepard extension.
 
 The measurements run on the study engine (:func:`mlsgalerkin.studies.kernels.run_kernel_study`,
-a local Dask cluster by default); this script adds the report (``summary.md`` with the source's
-claims, the figures) from :mod:`verification.kernel_report`. ``mlsgalerkin study kernels`` runs
+a local Dask cluster by default); this script adds the report (``summary.md`` with Xing's (2019)
+claims measured, the figures) from :mod:`verification.kernel_report`. ``mlsgalerkin study kernels`` runs
 the same measurements without the report. See ``verification/README.md``.
 
     python verification/kernel_study.py --out verification/results/kernel_study

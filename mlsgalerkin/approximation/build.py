@@ -9,13 +9,15 @@ r"""Build MLS / RKPM / Shepard / orthogonal shape functions with exact gradients
 
 Methods
 -------
-``"mls"``         weights ``w_j = W(x - x_j, h_j)`` (classical MLS, Lancaster & Šalkauskas 1981)
-``"rkpm"``        weights ``w_j = W(x - x_j, h_j) V_j`` with nodal ``volumes`` (§1.4)
-``"shepard"``     zeroth order, ``N_j = w_j / Σ w`` (§2.1); optional volumes
-``"orthogonal"``  modified Gram–Schmidt basis in the weighted inner product (§3): diagonal
+The formulas are in ``docs/theory/kernels_and_shape_functions.md`` (its sections in brackets).
+
+``"mls"``         weights ``w_j = W(x - x_j, h_j)`` (classical MLS, Lancaster & Šalkauskas 1981; §2)
+``"rkpm"``        weights ``w_j = W(x - x_j, h_j) V_j`` with nodal ``volumes`` (Liu, Jun & Zhang 1995; §3)
+``"shepard"``     zeroth order, ``N_j = w_j / Σ w`` (Shepard 1968; §4); optional volumes
+``"orthogonal"``  modified Gram–Schmidt basis in the weighted inner product (§5): diagonal
                   moment matrix, no solve; equal to MLS in exact arithmetic; optional volumes
 ``"singular_shepard"``  interpolating Shepard with the Franke–Little weight
-                  ``((R_j - r)/(R_j r))^α``, ``R_j = support * h_j`` (§2.2)
+                  ``((R_j - r)/(R_j r))^α``, ``R_j = support * h_j`` (Franke 1982; §4)
 
 Robustness policy
 -----------------

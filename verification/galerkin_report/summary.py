@@ -227,7 +227,7 @@ def summary_markdown(rows: list[dict], orders: list[dict], cfg, prov: dict,
     L.append("* **Nodes**: regular grids; *perturbed* = interior nodes moved by up to ±0.3 Δx "
              f"(uniform, seed {cfg.seed}), boundary nodes on the boundary.")
     L.append("* **Rules**: DNI (Voronoi volumes, direct gradients); SCNI (gradients smoothed over "
-             "the clipped Voronoi cells, 2 Gauss points per cell edge); VCI (beyond the sources: "
+             "the clipped Voronoi cells, 2 Gauss points per cell edge); VCI (Chen, Hillman & Rüter 2013: "
              "DNI trial functions, test gradients corrected so that the linear integration "
              f"constraint holds, correction profile `{VCI_CORRECTION}`, Petrov–Galerkin, "
              "`mlsgalerkin/integration/vci.py`; the constant profile is measured as an "
@@ -293,7 +293,7 @@ def summary_markdown(rows: list[dict], orders: list[dict], cfg, prov: dict,
     L.append(f"* **Spurious zero-energy modes** (bold): eigenvalues of the stiffness **without** "
              f"boundary conditions below {cfg.eig_tol:g} × the largest, minus the rigid modes "
              "(1 Poisson, 3 elasticity); dense `eigvalsh` (VCI is unsymmetric: singular values).")
-    L.append("* **Soft modes** (beyond the brief; symmetric rules): the rule's energy of every "
+    L.append("* **Soft modes** (symmetric rules): the rule's energy of every "
              "non-rigid nodal vector against the energy of the same shape functions integrated "
              "accurately (direct gradients, 4 × 4 Gauss points per cell), through the generalised "
              "eigenvalues μ of K_ref v = μ K_rule v. Count of modes with μ > 10 (energy "

@@ -1,4 +1,4 @@
-"""The kernel study's report: the source's claims, the MLS findings, ``summary.md``, figures.
+"""The kernel study's report: Xing's (2019) claims, the MLS findings, ``summary.md``, figures.
 
 The numbers come from :func:`mlsgalerkin.studies.kernels.run_kernel_study` (tables, fits,
 provenance, the engine's work-precision plot); :func:`write_report` adds to its output directory

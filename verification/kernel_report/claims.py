@@ -1,4 +1,4 @@
-"""The numbers behind the source's claims (a)-(d) and the MLS comparison, from rows and fits.
+"""The numbers behind Xing's (2019) claims (a)-(d) and the MLS comparison, from rows and fits.
 
 The key numbers the package reports itself (slopes, 5-neighbour errors, 2D orders) come from
 :mod:`mlsgalerkin.studies.kernels.headline`; everything else the summary states is computed here.

@@ -45,7 +45,7 @@ def summary_text(res: dict, cfg: StudyConfig, prov: dict, files: dict[str, str])
     L.append(
         f"* Domain [0, 2]; functions F1 = x, F2 = x^3, F3 = exp(-x), F4 = sin x, F5 = tan x; "
         f"the nine kernels of `SPH_STUDY_KERNELS` with the registry's constants and supports "
-        f"(note: the registry truncates the Gaussian at q = 3, the source at q = 2).\n"
+        f"(note: the registry truncates the Gaussian at q = 3, Xing (2019) at q = 2).\n"
         f"* **Integral approximation**: {cfg.n_eval_1d} evaluation points; the N_nb quadrature "
         f"points of each are the midpoints of N_nb equal cells covering its support, "
         f"δx' = 2κh/N_nb, symmetric about the point, exactly N_nb inside the support. F is "
@@ -142,7 +142,7 @@ def summary_text(res: dict, cfg: StudyConfig, prov: dict, files: dict[str, str])
     L.append("")
 
     # claims
-    L.append("## The source's claims, measured\n")
+    L.append("## Xing's (2019) claims, measured\n")
     bi = res["beta_integral"]
     bp = res["beta_particle"]
     second = [k for k in kernels if all(1.6 <= bi[k][f] <= 2.4 for f in SMOOTH_FUNCTIONS)]
@@ -277,8 +277,8 @@ def summary_text(res: dict, cfg: StudyConfig, prov: dict, files: dict[str, str])
     g2_unity = g2.normalisation(1) * unnormalised_integral(g2, 1)
     L.append(
         f"Related: the registry truncates the Gaussian at q = {get_kernel('gaussian').support:g} "
-        f"(∫W = {diag['gaussian']['unity']:.6f} if present), the source at q = 2, where "
-        f"∫W = {g2_unity:.5f}: with the source's truncation the Gaussian would carry the same "
+        f"(∫W = {diag['gaussian']['unity']:.6f} if present), Xing (2019) at q = 2, where "
+        f"∫W = {g2_unity:.5f}: with that truncation the Gaussian would carry the same "
         f"kind of h-independent floor, {abs(g2_unity - 1) * 100:.2f} % of |F|.\n"
         if "gaussian" in diag
         else ""

@@ -18,7 +18,7 @@ def meshfree_sections(res: dict, cfg: StudyConfig) -> list[str]:
     L: list[str] = []
     # part 2
     if "orders_1d" in res:
-        L.append("## Beyond the source: MLS / RKPM / Shepard shape functions\n")
+        L.append("## Beyond Xing (2019): MLS / RKPM / Shepard shape functions\n")
         L.append(
             f"1D: particles on [0, 2] with interior particles jittered by ±{cfg.jitter_1d:g} Δx "
             f"(seeded), evaluated at the particles; RKPM volumes = local spacing; h is the "

@@ -1,6 +1,6 @@
 r"""Kernel accuracy study (Xing 2019, §12.2.3) and its meshfree extension.
 
-Part 1 reproduces the source chapter's SPH study; part 2 asks the same questions of the MLS,
+Part 1 reproduces Xing's (2019) SPH study; part 2 asks the same questions of the MLS,
 RKPM and Shepard shape functions of :func:`mlsgalerkin.shape_functions`.
 
 Part 1 — SPH sums, 1D, on :math:`[0, 2]`
@@ -29,7 +29,7 @@ wall time ``wall_s`` (``time.perf_counter`` around building the approximation pl
 one function; short calls are repeated, best time kept) and its neighbour count; the grid runs on
 the study engine (:mod:`mlsgalerkin.studies.engine`), so ``worker`` says who measured it.
 
-This package computes the numbers (rows, fits, key numbers); the report with the source's claims,
+This package computes the numbers (rows, fits, key numbers); the report with Xing's (2019) claims,
 the findings and the figures is written by ``verification/kernel_study.py``.
 
 Modules

@@ -97,7 +97,7 @@ FUNCTIONS: tuple[StudyFunction, ...] = (
     StudyFunction("F5", "tan(x)", np.tan, lambda x: 2.0 * np.tan(x) / np.cos(x) ** 2),
 )
 FUNCTIONS_BY_LABEL = {f.label: f for f in FUNCTIONS}
-#: Functions of the source's claims (tan x is singular at pi/2 inside the domain).
+#: Functions of Xing's (2019) claims (tan x is singular at pi/2 inside the domain).
 CLAIM_FUNCTIONS = ("x", "x^3", "exp(-x)", "sin(x)")
 SMOOTH_FUNCTIONS = ("x^3", "exp(-x)", "sin(x)")
 
