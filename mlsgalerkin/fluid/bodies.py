@@ -98,8 +98,9 @@ def lattice(lower: ArrayLike, upper: ArrayLike, spacing: float) -> NDArray[np.fl
             f"lattice: the spacing {spacing:g} m is larger than twice the box's size {hi[a] - lo[a]:g} m along "
             f"axis {a}: not one particle fits; choose a spacing below {(hi[a] - lo[a]) / 2:g} m (a few particles "
             "across the smallest feature)")
-    _check_limit(float(np.prod(np.maximum(np.round(ratio), 1.0))), f"a lattice (box {np.round(hi - lo, 6).tolist()} m",
-                 spacing)
+    with np.errstate(over="ignore"):  # a product beyond 1e308 is inf: above any limit
+        count = float(np.prod(np.maximum(np.round(ratio), 1.0)))
+    _check_limit(count, f"a lattice (box {np.round(hi - lo, 6).tolist()} m", spacing)
     counts = np.maximum(np.round(ratio).astype(int), 1)
     axes = [lo[a] + (np.arange(counts[a]) + 0.5) * spacing for a in range(lo.size)]
     grid = np.meshgrid(*axes, indexing="ij")

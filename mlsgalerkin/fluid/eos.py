@@ -72,6 +72,9 @@ def tait_density(p: ArrayLike, rho0: ArrayLike, c0: float, gamma: float = 7.0) -
     cavitation limit ``p = −B``."""
     rho0 = np.asarray(rho0, dtype=float)
     B = rho0 * c0**2 / gamma
+    if not np.all(B > 0):
+        raise ValueError(f"the Tait stiffness B = rho0 c0²/gamma must be positive (rho0 and c0 positive), got "
+                         f"c0 = {c0!r}, rho0 between {np.min(rho0)!r} and {np.max(rho0)!r}")
     x = 1.0 + np.asarray(p, dtype=float) / B
     if np.any(x <= 0):
         raise ValueError(f"pressure below the Tait cavitation limit -B = {-float(np.min(B)):.6g} Pa")
