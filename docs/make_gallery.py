@@ -143,7 +143,7 @@ def _describe(problem: str) -> str:
     from mlsgalerkin.problem import load_problem
 
     doc = (load_problem(PROBLEMS / f"{problem}.py").__doc__ or "").strip().splitlines()
-    return doc[0].rstrip(".") if doc else problem
+    return doc[0].rstrip(".").replace("``", "`") if doc else problem  # reST to Markdown code
 
 
 def build_page(meta: dict) -> str:
