@@ -434,7 +434,10 @@ class Pictures(Monitor):
     (rendered at the end of a completed or paused run by
     :func:`~mlsgalerkin.io.render_run.render_run`: axes in metres, the field's unit, the time,
     walls in grey; a rendering failure is logged, never fatal: the frames and tables are
-    written). ``color_by`` is checked against the fluid's frame before the first step."""
+    written). ``color_by`` is checked against the field table with the scene (``Output.problems``)
+    and against the fluid's frame before the first step: a field the scene does not write
+    (``free_surface`` without ``FreeSurfaceDetection``) is reported in a warning and the run goes
+    on without pictures."""
 
     name = "pictures"
 
@@ -453,17 +456,23 @@ class Pictures(Monitor):
             return
         from mlsgalerkin.io.render_fields import resolve_field
 
+        self._skip = None
         for key, system in state.systems.items():
             if getattr(system, "frame_name", key) == "particles" and hasattr(system, "frame"):
                 _, data = system.frame()
                 try:
                     resolve_field(data, self.color_by, info.dim)
                 except ValueError as err:
-                    raise ValueError(f"the pictures cannot be coloured by {self.color_by!r}: {err}") from None
+                    # a field of the table that this scene does not write (free_surface without
+                    # FreeSurfaceDetection): the run goes on, without pictures
+                    self._skip = (f"the pictures cannot be coloured by {self.color_by!r} ({err}); the run "
+                                  f"writes none (after it: mlsgalerkin render {info.out} --color-by FIELD)")
+                    logger.warning("%s", self._skip)
 
     def finish(self, state: "RunState", status: str) -> None:
         info = self._info
-        if info.out is None or status not in ("completed", "paused") or not (self.gif or self.png):
+        if info.out is None or status not in ("completed", "paused") or not (self.gif or self.png) or \
+                getattr(self, "_skip", None):
             return
         try:
             self.render(info.out, info.scene, info.dim)

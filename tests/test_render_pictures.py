@@ -133,14 +133,20 @@ def test_unknown_fields_are_refused_with_the_list_of_fields():
     assert Output(color_by="velocity_y").problems() == []
 
 
-def test_the_pictures_monitor_checks_its_field_against_the_frame_before_the_first_step(tmp_path):
+def test_the_pictures_monitor_checks_its_field_against_the_frame_before_the_first_step(tmp_path, caplog):
     _, pts, data = _tank()
     fluid = SimpleNamespace(frame_name="particles", frame=lambda: (pts, data))
     state = SimpleNamespace(systems={"fluid": fluid})
     info = RunInfo(scene="tank", t_end=1.0, dim=2, out=tmp_path)
     Pictures(color_by="speed").start(state, info)
-    with pytest.raises(ValueError, match=r"cannot be coloured by 'free_surface'.*available: .*pressure"):
-        Pictures(color_by="free_surface").start(state, info)
+    assert caplog.records == []
+    missing = Pictures(color_by="free_surface")
+    with caplog.at_level("WARNING", logger="mlsgalerkin.monitors"):
+        missing.start(state, info)  # the run is not lost: a warning, and no pictures
+    assert "cannot be coloured by 'free_surface'" in caplog.text and "available: " in caplog.text
+    assert "mlsgalerkin render" in caplog.text
+    missing.finish(state, "completed")
+    assert list(tmp_path.iterdir()) == []
     assert Pictures(color_by="nonsense").problems()
 
 
