@@ -1,4 +1,4 @@
-"""Command line: ``mlsgalerkin kernels | run PROBLEM|FILE.py | problems | study kernels | study galerkin``.
+"""Command line: ``mlsgalerkin kernels | run PROBLEM|FILE.py | problems | render RUN_DIR | study kernels | study galerkin``.
 
 Also ``python -m mlsgalerkin ...`` and ``mlsgalerkin --version``. Library code logs; this module
 prints.
@@ -211,6 +211,35 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_render(args: argparse.Namespace) -> int:
+    from mlsgalerkin.io.render_run import RenderError, inspect_run, render_run
+
+    if args.snapshots < 0:
+        print(f"error: --snapshots must be 0 or more, got {args.snapshots}", file=sys.stderr)
+        return 2
+    if not (args.fps > 0):
+        print(f"error: --fps must be positive, got {args.fps}", file=sys.stderr)
+        return 2
+    frames_wanted = args.gif or args.png
+    try:
+        contents = inspect_run(args.run_dir, color_by=args.color_by if frames_wanted else None,
+                               need_frames=frames_wanted, need_timeseries=not frames_wanted)
+        written = render_run(args.run_dir, color_by=args.color_by, out=args.out, gif=args.gif, png=args.png,
+                             snapshots=args.snapshots if args.png else 0,
+                             timeseries=contents.timeseries is not None, fps=args.fps)
+    except (RenderError, ValueError, FileNotFoundError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    state = contents.status or "no summary.json: unfinished or interrupted"
+    print(f"{contents.title} ({state}): {len(contents.frames)} frames"
+          + (f", coloured by {args.color_by}" if frames_wanted else ""))
+    if contents.timeseries is None:
+        print(f"no {contents.directory / 'timeseries.csv'}: no time-series plot")
+    for path in written:
+        print(f"wrote {path}")
+    return 0
+
+
 def _version() -> str:
     from mlsgalerkin import __version__
 
@@ -261,6 +290,25 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-gif", action="store_true", help="skip the animation")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.set_defaults(func=_cmd_run)
+
+    p = sub.add_parser("render", help="draw the pictures of a finished or interrupted run: frames, animation, "
+                                      "time-series plots",
+                       description="Draw the pictures of a run directory from its files (particles.pvd, "
+                                   "particles_*.vtu, timeseries.csv; summary.json is not needed): final.png, a "
+                                   "panel of frames (frames.png), animation.gif and timeseries.png.")
+    p.add_argument("run_dir", help="the run directory (the --out of `mlsgalerkin run`, default results/PROBLEM)")
+    p.add_argument("--color-by", default="pressure", metavar="FIELD",
+                   help="colour field: pressure, density, density_ratio, speed, velocity, velocity_x, "
+                        "velocity_y, phase, mls_order, free_surface, ... (default: %(default)s)")
+    p.add_argument("--gif", action=argparse.BooleanOptionalAction, default=True,
+                   help="animation.gif of every frame (default: on)")
+    p.add_argument("--png", action=argparse.BooleanOptionalAction, default=True,
+                   help="final.png and the panel frames.png (default: on)")
+    p.add_argument("--snapshots", type=int, default=4, metavar="N",
+                   help="frames in the panel frames.png, spread over the run; 0: no panel (default: %(default)s)")
+    p.add_argument("--fps", type=float, default=8.0, help="frames per second of the animation (default: %(default)s)")
+    p.add_argument("--out", metavar="DIR", help="where to write the pictures (default: the run directory)")
+    p.set_defaults(func=_cmd_render)
 
     study = sub.add_parser("study", help="run a shipped study on the study engine (Dask)")
     studies = study.add_subparsers(dest="study", required=True)

@@ -118,6 +118,11 @@ class Output:
             out.append(f"output.times must be non-negative times (s), got {self.times!r}")
         if not (isinstance(self.keep_checkpoints, int) and self.keep_checkpoints >= 1):
             out.append(f"output.keep_checkpoints must be an integer >= 1, got {self.keep_checkpoints!r}")
+        from mlsgalerkin.io.render_fields import field_name_problem
+
+        color_problem = field_name_problem(self.color_by)
+        if color_problem:
+            out.append(f"output.color_by: {color_problem}")
         return out
 
 
@@ -481,20 +486,48 @@ class ProgressBar(Monitor):
 
 class Pictures(Monitor):
     """``animation.gif`` and/or ``final.png`` of the fluid frames coloured by ``color_by``
-    (rendered at the end of a completed or paused run; a rendering failure is logged, never
-    fatal: the frames and tables are written)."""
+    (rendered at the end of a completed or paused run by
+    :func:`~mlsgalerkin.io.render_run.render_run`: axes in metres, the field's unit, the time,
+    walls in grey; a rendering failure is logged, never fatal: the frames and tables are
+    written). ``color_by`` is checked against the field table with the scene (``Output.problems``)
+    and against the fluid's frame before the first step: a field the scene does not write
+    (``free_surface`` without ``FreeSurfaceDetection``) is reported in a warning and the run goes
+    on without pictures."""
 
     name = "pictures"
 
     def __init__(self, gif: bool = True, png: bool = True, color_by: str = "pressure") -> None:
         self.gif, self.png, self.color_by = gif, png, color_by
 
+    def problems(self) -> list[str]:
+        from mlsgalerkin.io.render_fields import field_name_problem
+
+        msg = field_name_problem(self.color_by)
+        return [f"Pictures(color_by={self.color_by!r}): {msg}"] if msg else []
+
     def start(self, state: "RunState", info: RunInfo) -> None:
         self._info = info
+        if info.out is None or not (self.gif or self.png):
+            return
+        from mlsgalerkin.io.render_fields import resolve_field
+
+        self._skip = None
+        for key, system in state.systems.items():
+            if getattr(system, "frame_name", key) == "particles" and hasattr(system, "frame"):
+                _, data = system.frame()
+                try:
+                    resolve_field(data, self.color_by, info.dim)
+                except ValueError as err:
+                    # a field of the table that this scene does not write (free_surface without
+                    # FreeSurfaceDetection): the run goes on, without pictures
+                    self._skip = (f"the pictures cannot be coloured by {self.color_by!r} ({err}); the run "
+                                  f"writes none (after it: mlsgalerkin render {info.out} --color-by FIELD)")
+                    logger.warning("%s", self._skip)
 
     def finish(self, state: "RunState", status: str) -> None:
         info = self._info
-        if info.out is None or status not in ("completed", "paused") or not (self.gif or self.png):
+        if info.out is None or status not in ("completed", "paused") or not (self.gif or self.png) or \
+                getattr(self, "_skip", None):
             return
         try:
             self.render(info.out, info.scene, info.dim)
@@ -502,28 +535,9 @@ class Pictures(Monitor):
             logger.warning("rendering failed (%s); the VTU series and tables are written", exc)
 
     def render(self, directory: Path, title: str, dim: int) -> None:
-        from mlsgalerkin.io import read_pvd, read_vtu, render_animation, render_snapshot
+        """Draw ``animation.gif``/``final.png`` of ``directory/particles.pvd`` (if it exists)."""
+        from mlsgalerkin.io.render_run import render_run
 
-        pvd = directory / "particles.pvd"
-        if not pvd.is_file():
+        if not (directory / "particles.pvd").is_file():
             return
-        frames = []
-        for t, path in read_pvd(pvd):
-            pts, data = read_vtu(path)
-            frames.append((t, pts[:, :dim], np.asarray(data[self.color_by])))
-        if not frames:
-            return
-        allv = np.concatenate([fr[2] for fr in frames])
-        clim = (float(np.percentile(allv, 1)), float(np.percentile(allv, 99)))
-        if clim[0] == clim[1]:
-            clim = (clim[0] - 1.0, clim[1] + 1.0)
-        lo = np.min([fr[1].min(axis=0) for fr in frames], axis=0)
-        hi = np.max([fr[1].max(axis=0) for fr in frames], axis=0)
-        bounds = (float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1]))
-        if self.gif:
-            render_animation(directory / "animation.gif", frames, clim=clim, title=title,
-                             scalar_name=self.color_by, bounds=bounds)
-        if self.png:
-            t, pts, val = frames[-1]
-            render_snapshot(directory / "final.png", pts, val, title=f"{title}  t = {t:.3f} s",
-                            clim=clim, scalar_name=self.color_by, bounds=bounds)
+        render_run(directory, color_by=self.color_by, gif=self.gif, png=self.png, title=title)

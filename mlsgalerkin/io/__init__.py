@@ -1,19 +1,25 @@
 """Files: atomic writes, provenance, VTU/PVD frames, checkpoints, CSV time series, pictures.
 
-=====================================  ==================================================
-:mod:`mlsgalerkin.io.files`            :func:`atomic_output`, :func:`atomic_write`,
-                                       :func:`write_json`, :func:`to_jsonable`,
-                                       :func:`csv_text`, :func:`write_csv_rows`
-:mod:`mlsgalerkin.io.provenance`       :func:`provenance`, :func:`git_commit`,
-                                       :func:`command_line`
-:mod:`mlsgalerkin.io.vtk`              :func:`write_vtu`, :func:`read_vtu`,
-                                       :class:`PVDSeries` (ParaView ``.pvd`` series)
-:mod:`mlsgalerkin.io.checkpoint`       :func:`save_checkpoint`, :func:`load_checkpoint`,
-                                       :func:`latest_checkpoint`, :func:`prune_checkpoints`
-:mod:`mlsgalerkin.io.timeseries`       :class:`TimeSeriesWriter`, :func:`read_timeseries`
-:mod:`mlsgalerkin.io.render`           :func:`render_snapshot`, :func:`render_animation`,
-                                       :func:`render_vtu_series` (PNG / GIF, off screen)
-=====================================  ==================================================
+=========================================  ==================================================
+:mod:`mlsgalerkin.io.files`                :func:`atomic_output`, :func:`atomic_write`,
+                                           :func:`write_json`, :func:`to_jsonable`,
+                                           :func:`csv_text`, :func:`write_csv_rows`
+:mod:`mlsgalerkin.io.provenance`           :func:`provenance`, :func:`git_commit`,
+                                           :func:`command_line`
+:mod:`mlsgalerkin.io.vtk`                  :func:`write_vtu`, :func:`read_vtu`,
+                                           :class:`PVDSeries` (ParaView ``.pvd`` series)
+:mod:`mlsgalerkin.io.checkpoint`           :func:`save_checkpoint`, :func:`load_checkpoint`,
+                                           :func:`latest_checkpoint`, :func:`prune_checkpoints`
+:mod:`mlsgalerkin.io.timeseries`           :class:`TimeSeriesWriter`, :func:`read_timeseries`
+:mod:`mlsgalerkin.io.render`               :func:`render_snapshot`, :func:`render_animation`,
+                                           :func:`render_vtu_series` (PNG / GIF, off screen)
+:mod:`mlsgalerkin.io.render_fields`        :class:`FieldStyle`, :func:`register_field`: each
+                                           field's label, unit and colour map
+:mod:`mlsgalerkin.io.render_frames`        labelled pictures of particle frames (matplotlib)
+:mod:`mlsgalerkin.io.render_timeseries`    :func:`render_timeseries`: the time series' panels
+:mod:`mlsgalerkin.io.render_run`           :func:`render_run`, :func:`render_frame`: a run
+                                           directory's pictures; :class:`RenderError`
+=========================================  ==================================================
 
 Every file is written atomically (temporary file in the same directory, then
 ``os.replace``) and nothing is ever pickled. This package imports nothing from the solvers or
@@ -51,6 +57,9 @@ from mlsgalerkin.io.render import (
     render_snapshot,
     render_vtu_series,
 )
+from mlsgalerkin.io.render_fields import FieldStyle, register_field
+from mlsgalerkin.io.render_run import RenderError, render_frame, render_run
+from mlsgalerkin.io.render_timeseries import render_timeseries
 from mlsgalerkin.io.timeseries import TimeSeriesWriter, read_timeseries
 from mlsgalerkin.io.vtk import PVDSeries, read_pvd, read_vtu, write_vtu
 
@@ -58,7 +67,9 @@ __all__ = [
     "CHECKPOINT_FORMAT",
     "CHECKPOINT_VERSION",
     "CheckpointError",
+    "FieldStyle",
     "PVDSeries",
+    "RenderError",
     "TimeSeriesWriter",
     "atomic_output",
     "atomic_write",
@@ -77,8 +88,12 @@ __all__ = [
     "read_pvd",
     "read_timeseries",
     "read_vtu",
+    "register_field",
     "render_animation",
+    "render_frame",
+    "render_run",
     "render_snapshot",
+    "render_timeseries",
     "render_vtu_series",
     "save_checkpoint",
     "to_jsonable",

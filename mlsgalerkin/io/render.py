@@ -1,5 +1,9 @@
 """Off-screen pictures of particle fields: PNG snapshots and animated GIFs.
 
+Plain pictures of points and one scalar. The pictures of a run (axes in metres, the field's
+unit, walls apart from the fluid, the time) are drawn by :mod:`mlsgalerkin.io.render_frames`
+and :mod:`mlsgalerkin.io.render_run`.
+
 Two backends draw a frame (an RGB image):
 
 ``"pyvista"``
@@ -307,7 +311,7 @@ def _frame(backend: str, pts: np.ndarray, s: np.ndarray, **kw) -> np.ndarray:
 def _title(title: str, time: float | None) -> str:
     if time is None:
         return title
-    stamp = f"t = {float(time):.6g}"
+    stamp = f"t = {float(time):.6g} s"
     return f"{title}   {stamp}" if title else stamp
 
 
@@ -342,7 +346,7 @@ def render_snapshot(
     scalars : ndarray, shape (n,)
         Colour values (any unit; ``nan`` drawn grey).
     title : str
-        Title text; ``time`` [s], if given, is appended as ``t = ...``.
+        Title text; ``time`` [s], if given, is appended as ``t = ... s``.
     scalar_name : str
         Colour-bar label.
     clim : (float, float), optional
