@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(PY) -m mlsgalerkin.cli run gravity_current --dx 0.004 --out results/demo
+	$(PY) -m mlsgalerkin.cli run gravity_current --dx 0.004 --out results/demo --overwrite
 
 test: $(STAMP)
 	$(PY) -m pytest -q -m "not slow"
