@@ -21,9 +21,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.fluid import (
-    DensityFilter, FluidBody, Gravity, MonaghanViscosity, NewtonianViscosity, Phase, TaitPressure, Walls,
-    hydrostatic_density, lattice, tait_stored_energy, wall_box,
+    DensityDiffusion, DensityFilter, FluidBody, FreeSurfaceDetection, Gravity, MonaghanViscosity, NewtonianViscosity,
+    ParticleShifting, Phase, TaitPressure, Walls, hydrostatic_density, lattice, tait_stored_energy, wall_box,
 )
+from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
 
@@ -45,6 +46,10 @@ class Parameters:
     t_end: float = 0.16            #: end time (s)
     c0_factor: float = 10.0        #: sound speed / impact speed (–)
     alpha: float = 0.05            #: Monaghan artificial viscosity α (–)
+    delta: float = 0.0             #: density diffusion δ (δ-SPH); 0 drops it (–)
+    shifting: str = "off"          #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
+    density_filter: int = 20       #: Shepard density filter every this many steps; 0 drops it (–)
+    negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     h_factor: float = 1.3          #: smoothing length / particle spacing, h/dx (–)
     g: float = 9.81                #: gravitational acceleration (m/s²)
     gif: bool = True               #: render animation.gif and final.png (bool)
@@ -73,6 +78,18 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     body = FluidBody("liquid", pos, p.dx, [water], velocity=vel, density=rho)
     walls = wall_box((0.0, 0.0), (p.pool_width, 2.2 * p.pool_depth), p.dx, layers=3, reference_density=p.rho)
     n = body.n
+    effects = [TaitPressure(c0, u_max=p.speed, negative_pressure=p.negative_pressure), Gravity((0.0, -p.g)),
+               Walls("free_slip"), NewtonianViscosity()]
+    if p.alpha > 0:
+        effects.append(MonaghanViscosity(p.alpha))
+    if p.density_filter > 0:
+        effects.append(DensityFilter(p.density_filter))
+    if p.delta > 0:
+        effects.append(DensityDiffusion(p.delta))
+    if p.shifting != "off":
+        effects.append(ParticleShifting("local" if p.shifting == "local" else None))
+    if p.negative_pressure == "free_surface":
+        effects.append(FreeSurfaceDetection(every=5))
 
     def total_energy(state) -> float:
         s = state.fluid
@@ -82,9 +99,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
 
     return Scene(
         [body, walls],
-        [TaitPressure(c0, u_max=p.speed, negative_pressure="cavitate"), Gravity((0.0, -p.g)), Walls("free_slip"),
-         NewtonianViscosity(),
-         MonaghanViscosity(p.alpha), DensityFilter(20)],
+        effects,
         t_end=p.t_end, name="drop_impact", approximation=Approximation(h_factor=p.h_factor),
         output=Output(times=(0.0,) + tuple(t for t in PAPER_OUTPUT_TIMES if t <= p.t_end) + (p.t_end,),
                       probe_every=0.0005, gif=p.gif, png=p.gif, color_by="speed"),
@@ -157,7 +172,11 @@ def check(p: Parameters) -> list[str]:
     """Problems with the parameters (see ``mlsgalerkin.problem``)."""
     out = require_positive(p, "drop_diameter", "pool_width", "pool_depth", "speed", "rho", "dx", "t_end",
                            "c0_factor", "h_factor", "g")
-    out += require_nonnegative(p, "viscosity", "alpha")
+    out += require_nonnegative(p, "viscosity", "alpha", "delta", "density_filter")
+    out += require(p.shifting in ("local", "design", "off"),
+                   f"shifting = {p.shifting!r}: choose one of local, design, off")
+    out += require(p.negative_pressure in NEGATIVE_PRESSURE_MODES,
+                   f"negative_pressure = {p.negative_pressure!r}: choose one of {', '.join(NEGATIVE_PRESSURE_MODES)}")
     if not out:
         out += require(p.drop_diameter < p.pool_width,
                        f"the drop ({p.drop_diameter:g} m) must be narrower than the pool ({p.pool_width:g} m)")

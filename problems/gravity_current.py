@@ -32,8 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.fluid import (
-    DensityFilter, FluidBody, Gravity, MonaghanViscosity, NewtonianViscosity, Phase, TaitPressure,
-    Walls, hydrostatic_density, wall_box,
+    DensityDiffusion, DensityFilter, FluidBody, Gravity, MonaghanViscosity, NewtonianViscosity, ParticleShifting,
+    Phase, TaitPressure, Walls, hydrostatic_density, wall_box,
 )
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
@@ -52,8 +52,11 @@ class Parameters:
     viscosity: float = 1.0e-3      #: dynamic viscosity of both fluids; 0 drops the effect (Pa s)
     dx: float = 0.003              #: particle spacing (m)
     t_end: float = 0.8             #: end time (s)
-    c0: float = 10.0               #: sound speed (m/s)
+    c0: float = 10.0               #: sound speed; 0 picks 10 max(2.5 v_h, sqrt(g D)) (m/s)
     alpha: float = 0.1             #: Monaghan artificial viscosity α (–)
+    delta: float = 0.0             #: density diffusion δ (δ-SPH, same-phase pairs); 0 drops it (–)
+    shifting: str = "off"          #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
+    density_filter: int = 20       #: Shepard density filter every this many steps; 0 drops it (–)
     h_factor: float = 1.3          #: smoothing length / particle spacing, h/dx (–)
     g: float = 9.81                #: gravitational acceleration (m/s²)
     slip: str = "free_slip"        #: wall condition: free_slip, no_slip or fixed (choice)
@@ -67,6 +70,15 @@ def reference_head_speed(p: Parameters) -> float:
     return 0.4 * math.sqrt(p.g * p.depth * (p.rho_heavy - p.rho_light) / p.rho_light)
 
 
+def sound_speed(p: Parameters) -> float:
+    """``c0`` (m/s): the parameter, or for ``c0 = 0`` ten times the larger of the expected
+    largest speed ``2.5 v_h`` and the long-wave speed ``sqrt(g D)`` (density variations of
+    about 1 % from both the flow and the hydrostatic pressure)."""
+    if p.c0 > 0:
+        return p.c0
+    return 10.0 * max(2.5 * reference_head_speed(p), math.sqrt(p.g * p.depth))
+
+
 def make_scene(p: Parameters = Parameters()) -> Scene:
     """The lock-exchange scene for parameters ``p``."""
     light = Phase("light", p.rho_light, p.viscosity)
@@ -75,12 +87,21 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     x, y = body.positions[:, 0], body.positions[:, 1]
     body.phase[:] = (x > 0.5 * p.length).astype(np.int64)
     rho0 = body.reference_density
-    body.density[:] = hydrostatic_density(rho0, p.depth - y, p.g, p.c0)
+    body.density[:] = hydrostatic_density(rho0, p.depth - y, p.g, sound_speed(p))
     top = p.depth if p.lid else 1.5 * p.depth
     walls = wall_box((0.0, 0.0), (p.length, top), p.dx, layers=3, open_top=not p.lid,
                      reference_density=p.rho_light)
-    effects = [TaitPressure(p.c0, u_max=reference_head_speed(p) * 2.5), Gravity((0.0, -p.g)),
-               Walls(p.slip), MonaghanViscosity(p.alpha), DensityFilter(20)]
+    c0 = sound_speed(p)
+    u_max = reference_head_speed(p) * 2.5
+    effects = [TaitPressure(c0, u_max=u_max), Gravity((0.0, -p.g)), Walls(p.slip)]
+    if p.alpha > 0:
+        effects.append(MonaghanViscosity(p.alpha, flow=(reference_head_speed(p), p.depth)))
+    if p.density_filter > 0:
+        effects.append(DensityFilter(p.density_filter))
+    if p.delta > 0:
+        effects.append(DensityDiffusion(p.delta))
+    if p.shifting != "off":
+        effects.append(ParticleShifting("local" if p.shifting == "local" else None))
     if p.viscosity > 0:
         effects.append(NewtonianViscosity())
     n_fluid = body.n
@@ -149,9 +170,11 @@ def analyse(result, p: Parameters) -> dict:
 
 def check(p: Parameters) -> list[str]:
     """Problems with the parameters (see ``mlsgalerkin.problem``)."""
-    out = require_positive(p, "depth", "length", "rho_light", "rho_heavy", "dx", "t_end", "c0", "h_factor", "g",
+    out = require_positive(p, "depth", "length", "rho_light", "rho_heavy", "dx", "t_end", "h_factor", "g",
                            "frame_every")
-    out += require_nonnegative(p, "viscosity", "alpha")
+    out += require_nonnegative(p, "viscosity", "alpha", "delta", "c0", "density_filter")
+    out += require(p.shifting in ("local", "design", "off"),
+                   f"shifting = {p.shifting!r}: choose one of local, design, off")
     if not out:
         out += require(p.rho_heavy > p.rho_light,
                        f"rho_heavy = {p.rho_heavy:g} must exceed rho_light = {p.rho_light:g}: the heavy fluid runs "

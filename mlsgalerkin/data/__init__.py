@@ -33,10 +33,17 @@ def reference_path(name: str) -> Path:
 
 def reference_columns(name: str) -> dict[str, np.ndarray]:
     """The columns of a shipped CSV file (``#`` lines are comments; the first other line is the
-    header), as float arrays."""
+    header), as float arrays; a column that is not numeric (a sensor name, say) as strings."""
     import csv
 
     lines = [ln for ln in reference_path(name).read_text().splitlines() if ln.strip() and not ln.startswith("#")]
     rows = list(csv.reader(lines))
     header, body = rows[0], rows[1:]
-    return {h: np.array([float(r[j]) for r in body]) for j, h in enumerate(header)}
+    out = {}
+    for j, h in enumerate(header):
+        column = [r[j].strip() for r in body]
+        try:
+            out[h] = np.array([float(v) for v in column])
+        except ValueError:
+            out[h] = np.array(column)
+    return out

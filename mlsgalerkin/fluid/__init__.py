@@ -16,6 +16,9 @@ module                                 contents
 :mod:`~mlsgalerkin.fluid.pair_viscosity`  :class:`MonaghanViscosity` and its numba kernel
 :mod:`~mlsgalerkin.fluid.walls`        :class:`Walls` and the wall-state kernel
 :mod:`~mlsgalerkin.fluid.filters`      :class:`DensityFilter` and its kernels
+:mod:`~mlsgalerkin.fluid.density_diffusion`  :class:`DensityDiffusion` (δ-SPH) and its kernel
+:mod:`~mlsgalerkin.fluid.shifting`     :class:`ParticleShifting` and its kernel
+:mod:`~mlsgalerkin.fluid.corrected_gradient`  the renormalised gradient of the density ratio
 :mod:`~mlsgalerkin.fluid.free_surface` :class:`FreeSurfaceDetection` and its kernels
 :mod:`~mlsgalerkin.fluid.time_step`    every time-step limit
 :mod:`~mlsgalerkin.fluid.mass`         lumped, particle and consistent mass
@@ -35,6 +38,7 @@ from mlsgalerkin.fluid.bodies import (
     particle_limit,
     wall_box,
 )
+from mlsgalerkin.fluid.density_diffusion import DensityDiffusion
 from mlsgalerkin.fluid.effect import Effect
 from mlsgalerkin.fluid.eos import (
     MachNumberWarning,
@@ -50,12 +54,14 @@ from mlsgalerkin.fluid.filters import DensityFilter
 from mlsgalerkin.fluid.free_surface import FreeSurfaceDetection
 from mlsgalerkin.fluid.gravity import Gravity
 from mlsgalerkin.fluid.integrators import Integrator, KickDriftKick, PredictorCorrector
-from mlsgalerkin.fluid.pair_viscosity import MonaghanViscosity
+from mlsgalerkin.fluid.pair_viscosity import MonaghanViscosity, NumericalViscosityWarning, numerical_viscosity
+from mlsgalerkin.fluid.shifting import ParticleShifting
 from mlsgalerkin.fluid.solver import FluidSolver
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.fluid.time_step import (
     acoustic_limit,
     bulk_viscosity_limit,
+    density_diffusion_limit,
     force_limit,
     pair_viscosity_limit,
     viscous_limit,
@@ -65,6 +71,7 @@ from mlsgalerkin.fluid.walls import Walls
 
 __all__ = [
     "BulkViscosity",
+    "DensityDiffusion",
     "DensityFilter",
     "Effect",
     "FluidBody",
@@ -77,7 +84,9 @@ __all__ = [
     "MachNumberWarning",
     "MonaghanViscosity",
     "NewtonianViscosity",
+    "NumericalViscosityWarning",
     "ParticleLimitError",
+    "ParticleShifting",
     "Phase",
     "PredictorCorrector",
     "TaitEOS",
@@ -86,9 +95,11 @@ __all__ = [
     "Walls",
     "acoustic_limit",
     "bulk_viscosity_limit",
+    "density_diffusion_limit",
     "force_limit",
     "hydrostatic_density",
     "lattice",
+    "numerical_viscosity",
     "pair_viscosity_limit",
     "particle_limit",
     "tait_density",

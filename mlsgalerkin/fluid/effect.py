@@ -9,6 +9,7 @@ stage         what happens
 ============  ===========================================================================
 kinematics    wall-particle velocities (before the velocity gradient is formed)
 (solver)      velocity gradient ``L_k = Σ_j v_j ⊗ ∇N_j(x_k)``, continuity ``ρ̇ = −ρ tr L``
+continuity    added terms of the continuity rate ``ρ̇`` (density diffusion)
 pressure      the pressure model: ``p``, sound speed ``c`` (exactly one effect)
 boundary      wall-particle pressure and density
 (solver)      stress ``σ = −p I``
@@ -18,6 +19,8 @@ stress        added stresses: Newtonian viscosity, bulk artificial viscosity
 force         added nodal forces: gravity ``m_i g``, Monaghan pair viscosity
 (solver)      acceleration ``a = f/m`` of the fluid particles
 after_step    density re-initialisation, free-surface detection (every few steps)
+drift         at the start of the next step's drift (positions ``xⁿ``, step ``Δt`` known):
+              displacements added to the drift (particle shifting)
 ============  ===========================================================================
 
 Effects talk to each other only through the :class:`~mlsgalerkin.fluid.state.FluidState`:
@@ -48,7 +51,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["SOLVER_QUANTITIES", "STAGES", "Effect", "check_nonnegative", "check_positive"]
 
-STAGES = ("kinematics", "pressure", "boundary", "stress", "force", "after_step")
+STAGES = ("kinematics", "continuity", "pressure", "boundary", "stress", "force", "after_step", "drift")
 SOLVER_QUANTITIES = frozenset({
     "positions", "velocity", "density", "mass", "volume", "velocity_gradient",
     "shape_functions", "neighbors", "continuity_rate",
@@ -73,11 +76,13 @@ class Effect:
         ``provides`` into the state."""
 
     def kinematics(self, s: FluidState) -> None: ...
+    def continuity(self, s: FluidState) -> None: ...
     def pressure(self, s: FluidState) -> None: ...
     def boundary(self, s: FluidState) -> None: ...
     def stress(self, s: FluidState) -> None: ...
     def force(self, s: FluidState) -> None: ...
     def after_step(self, s: FluidState) -> None: ...
+    def drift(self, s: FluidState, dt: float) -> None: ...
 
     def time_step_limit(self, s: FluidState) -> float:
         """Largest stable time step this effect allows (s); ``inf`` if it sets none."""

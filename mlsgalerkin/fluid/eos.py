@@ -48,6 +48,10 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 
 
+#: What :class:`TaitPressure` does with negative pressures (see its docstring).
+NEGATIVE_PRESSURE_MODES = ("allow", "clamp", "cavitate", "free_surface")
+
+
 class MachNumberWarning(UserWarning):
     """The sound speed is too low for the expected flow speed (Mach number above the limit)."""
 
@@ -167,7 +171,10 @@ class TaitPressure(Effect):
     fluid particles with ``p < 0``), ``"clamp"`` (``p = max(p, 0)``; the density may still
     drift below ``ρ0``) or ``"cavitate"`` (a liquid that cannot carry tension: the density is
     floored at ``ρ0``, so ``p ≥ 0`` and a splashing particle's volume never exceeds ``M/ρ0``;
-    the floorings are counted). Provides ``pressure`` and ``sound_speed``. Time-step limit: the
+    the floorings are counted) or ``"free_surface"`` (the same floor on the particles that
+    :class:`~mlsgalerkin.fluid.free_surface.FreeSurfaceDetection` flags as free surface — a
+    surface in contact with air carries no tension — while the bulk keeps negative pressures;
+    needs ``FreeSurfaceDetection`` listed). Provides ``pressure`` and ``sound_speed``. Time-step limit: the
     acoustic CFL ``cfl · h/(c + |v|)`` (:func:`~mlsgalerkin.fluid.time_step.acoustic_limit`).
     """
 
@@ -199,8 +206,13 @@ class TaitPressure(Effect):
         check_positive("TaitPressure", "cfl", self.cfl, problems)
         if not self.gamma >= 1:
             problems.append(f"TaitPressure: gamma must be >= 1, got {self.gamma}")
-        if self.negative_pressure not in ("allow", "clamp", "cavitate"):
-            problems.append("TaitPressure: negative_pressure must be 'allow', 'clamp' or 'cavitate'")
+        if self.negative_pressure not in NEGATIVE_PRESSURE_MODES:
+            problems.append(f"TaitPressure: negative_pressure must be one of {NEGATIVE_PRESSURE_MODES}, got "
+                            f"{self.negative_pressure!r}")
+        if self.negative_pressure == "free_surface" and not any(
+                "free_surface" in getattr(e, "provides", ()) for e in scene.effects):
+            problems.append("TaitPressure(negative_pressure='free_surface') floors the density of the free-surface "
+                            "particles: list FreeSurfaceDetection(), which flags them")
         if not problems and self.u_max is not None:
             TaitEOS(1.0, self.c0, self.gamma).check_mach(self.u_max)
         return problems
@@ -214,6 +226,10 @@ class TaitPressure(Effect):
             below = s.rho[f] < s.rho0[f]
             self.cavitated += int(np.count_nonzero(below))
             np.maximum(s.rho[f], s.rho0[f], out=s.rho[f])
+        elif self.negative_pressure == "free_surface":
+            below = (s.rho[f] < s.rho0[f]) & s.extra["free_surface"][f]
+            self.cavitated += int(np.count_nonzero(below))
+            s.rho[f][below] = s.rho0[f][below]
         ratio = s.rho[f] / s.rho0[f]
         p = tait_pressure(ratio, s.rho0[f], self.c0, self.gamma)
         negative = p < 0.0

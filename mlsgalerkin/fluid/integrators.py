@@ -8,7 +8,8 @@ goes up to that point, the run loop lets the interactions exchange forces at ``t
 does both, for a fluid on its own.
 
 ``"kdk"`` — :class:`KickDriftKick` (default, one evaluation per step)
-    ``v += ½Δt a``; ``ρ += ½Δt ρ̇(x^n, v^½)`` (old table, new velocity); ``x += Δt v``; walls to
+    ``v += ½Δt a``; ``ρ += ½Δt ρ̇(x^n, v^½)`` (old table, new velocity); drift-stage effects
+    (particle shifting, ``x += δr``); ``x += Δt v``; walls to
     ``t + Δt``; kinematics at ``x^{n+1}``; ``ρ += ½Δt ρ̇(x^{n+1}, v^½)`` | dynamics;
     ``v += ½Δt a``. Velocity and density form a staggered leapfrog pair, stable for
     ``ω Δt < 2``. (Advancing ``ρ`` with the rate of the *previous* half step instead has
@@ -68,9 +69,12 @@ class KickDriftKick(Integrator):
         s.v[f] += 0.5 * dt * s.a[f]
         solver.timer.add("integrate", t0)
         # density is advanced with the half-step velocity over both ends of the drift
-        # (staggered leapfrog for the v–ρ wave pair; a lagged rate would be unstable)
-        solver.continuity_rate()
+        # (staggered leapfrog for the v–ρ wave pair; a lagged rate would be unstable). The
+        # added terms (density diffusion: positions and densities only) are those of the last
+        # evaluation, at these positions
+        solver.continuity_rate(reuse_added=True)
         s.rho[f] += 0.5 * dt * s.drho[f]
+        solver.drift_effects(dt)  # particle shifting: moves x by δr, re-interpolates v and ρ
         t0 = time.perf_counter()
         s.x[f] += dt * s.v[f]
         solver.move_walls(t + dt)
@@ -96,6 +100,7 @@ class PredictorCorrector(Integrator):
     def begin(self, solver: "FluidSolver", t: float, dt: float) -> None:
         s = solver.state
         f = s.fluid
+        solver.drift_effects(dt)  # particle shifting at xⁿ (moves x by δr, re-interpolates v and ρ)
         t0 = time.perf_counter()
         x0, v0, rho0 = s.x[f].copy(), s.v[f].copy(), s.rho[f].copy()
         s.v[f] = v0 + 0.5 * dt * s.a[f]

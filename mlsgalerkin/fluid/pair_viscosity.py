@@ -49,6 +49,7 @@ Example
 from __future__ import annotations
 
 import math
+import warnings
 from typing import TYPE_CHECKING, Any
 
 import numba
@@ -298,12 +299,32 @@ def monaghan_viscosity_force_reference(
 # --------------------------------------------------------------------------------------
 
 
+#: Below this Reynolds number of the artificial viscosity (flow speed × length / ν_num) a run
+#: warns: measured on the gravity current, the head speed error passes 10 % below about 100
+#: (``docs/theory/stabilisation.md``).
+REYNOLDS_THRESHOLD = 100.0
+
+
+class NumericalViscosityWarning(UserWarning):
+    """The artificial viscosity sets a flow's Reynolds number below :data:`REYNOLDS_THRESHOLD`."""
+
+
+def numerical_viscosity(alpha: float, h: float, c0: float, dim: int) -> float:
+    """Kinematic viscosity (m²/s) of Monaghan's artificial viscosity in the continuum limit,
+    ``ν = α h c0 / (2(d + 2))`` (Monaghan 2005): ``α h c0/8`` in 2D, ``α h c0/10`` in 3D."""
+    return alpha * h * c0 / (2.0 * (dim + 2))
+
+
 class MonaghanViscosity(Effect):
     r"""Monaghan's pair artificial viscosity (Monaghan 1992), a pair force
     ``f_i = −Σ_j M_i M_j Π_ij ∇_i W_ij`` on the fluid particles (module docstring): momentum-
     conserving and able to damp the velocity modes that nodal integration cannot see.
     ``alpha`` 0.01–0.1 for water, ``beta`` 0. It acts as a kinematic viscosity of about
-    ``α h c0 / 8`` in 2D (see ``docs/theory/galerkin_fluid.md``). Time-step limit
+    ``α h c0 / 8`` in 2D (:func:`numerical_viscosity`; ``docs/theory/galerkin_fluid.md``),
+    reported in the run's summary. Given ``flow=(U, L)`` (the flow's speed, m/s, and length,
+    m) it also reports the Reynolds number ``U L / ν`` this viscosity implies and warns
+    (:class:`NumericalViscosityWarning`) when it is below ``min_reynolds`` (default
+    :data:`REYNOLDS_THRESHOLD`). Time-step limit
     ``0.4 h/(c + 0.6(α c + β max φ))``
     (:func:`~mlsgalerkin.fluid.time_step.pair_viscosity_limit`).
     """
@@ -312,23 +333,55 @@ class MonaghanViscosity(Effect):
     stages = ("force",)
     reads = ("velocity", "density", "sound_speed", "neighbors")
 
-    def __init__(self, alpha: float = 0.05, beta: float = 0.0) -> None:
+    def __init__(self, alpha: float = 0.05, beta: float = 0.0, *, flow: tuple[float, float] | None = None,
+                 min_reynolds: float = REYNOLDS_THRESHOLD) -> None:
         self.alpha, self.beta = alpha, beta
+        self.flow, self.min_reynolds = flow, min_reynolds
         self.max_phi = 0.0
+        self.nu = math.nan
+        self.reynolds = math.nan
 
     def __repr__(self) -> str:
-        return f"MonaghanViscosity(alpha={self.alpha:g}, beta={self.beta:g})"
+        extra = "" if self.flow is None else f", flow={tuple(self.flow)!r}"
+        return f"MonaghanViscosity(alpha={self.alpha:g}, beta={self.beta:g}{extra})"
 
     def check(self, scene: "Scene") -> list[str]:
         problems: list[str] = []
         check_nonnegative("MonaghanViscosity", "alpha", self.alpha, problems)
         check_nonnegative("MonaghanViscosity", "beta", self.beta, problems)
+        if self.flow is not None:
+            ok = len(tuple(self.flow)) == 2 and all(math.isfinite(v) and v > 0 for v in self.flow)
+            if not ok:
+                problems.append(f"MonaghanViscosity: flow must be (speed m/s, length m), both positive, got "
+                                f"{self.flow!r}")
         return problems
 
     def setup(self, state: FluidState, scene: "Scene") -> None:
         self._kernel = get_kernel(scene.approximation.kernel)
         self._active = np.zeros(state.n, dtype=bool)
         self._active[state.fluid] = True
+        pressure = next((e for e in scene.effects if getattr(e, "role", "") == "pressure" and hasattr(e, "c0")), None)
+        c0 = float(pressure.c0) if pressure is not None else math.nan
+        h = float(np.mean(state.h[state.fluid])) if state.n_fluid else math.nan
+        self.nu = numerical_viscosity(self.alpha, h, c0, state.dim)
+        if self.flow is not None:
+            U, L = (float(v) for v in self.flow)
+            self.reynolds = U * L / self.nu if self.nu > 0 else math.inf
+            if self.reynolds < self.min_reynolds:
+                warnings.warn(
+                    f"MonaghanViscosity(alpha={self.alpha:g}) acts as a viscosity of {self.nu:.3g} m²/s "
+                    f"(alpha h c0 / {2 * (state.dim + 2)}, h = {h:.3g} m, c0 = {c0:.3g} m/s): with the flow's speed "
+                    f"{U:.3g} m/s and length {L:.3g} m its Reynolds number is {self.reynolds:.3g}, below "
+                    f"{self.min_reynolds:g}, so the artificial viscosity, not the physics, sets the flow. Lower alpha "
+                    f"(list DensityDiffusion and ParticleShifting to keep the run stable), refine dx, or lower c0",
+                    NumericalViscosityWarning, stacklevel=2)
+
+    def summary(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"alpha": self.alpha, "beta": self.beta, "numerical_viscosity_m2_per_s": self.nu}
+        if self.flow is not None:
+            out["flow_speed_m_per_s"], out["flow_length_m"] = (float(v) for v in self.flow)
+            out["numerical_reynolds_number"] = self.reynolds
+        return out
 
     def force(self, s: FluidState) -> None:
         # the solver's own arrays are valid by construction: call the compiled kernel directly

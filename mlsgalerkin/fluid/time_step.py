@@ -9,6 +9,8 @@ bulk viscosity          ``C h / (a_L c)``, ``C = 0.125`` (diffusion number   ``B
                         of ``ν_b = a_L h c``)
 pair viscosity          ``C h / (c + 0.6 (α c + β max φ))``, ``C = 0.4``     ``MonaghanViscosity``
                         (Monaghan 1992)
+density diffusion       ``C h / (δ c0)``, ``C = 0.125``                     ``DensityDiffusion``
+particle shifting       none (the shift is a fraction of the step's drift)  ``ParticleShifting``
 force (acceleration)    ``C sqrt(min h / max |a|)``, ``C = 0.25``           the solver
 ======================  ==================================================  ==================
 
@@ -35,7 +37,10 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["acoustic_limit", "bulk_viscosity_limit", "force_limit", "pair_viscosity_limit", "viscous_limit"]
+__all__ = [
+    "acoustic_limit", "bulk_viscosity_limit", "density_diffusion_limit", "force_limit", "pair_viscosity_limit",
+    "viscous_limit",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -61,6 +66,14 @@ def bulk_viscosity_limit(h: FloatArray, c: FloatArray, linear: float, factor: fl
     if linear <= 0 or h.size == 0:
         return math.inf
     return factor * float(np.min(h / (linear * c)))
+
+
+def density_diffusion_limit(h: FloatArray, delta: float, c0: float, factor: float = 0.125) -> float:
+    """``factor · min(h) / (δ c0)``: the diffusion limit of the δ-SPH density diffusion, whose
+    coefficient is about ``δ h c0``; ``inf`` for ``δ = 0`` or no particles."""
+    if delta <= 0 or h.size == 0:
+        return math.inf
+    return factor * float(np.min(h)) / (delta * c0)
 
 
 def pair_viscosity_limit(h: FloatArray, c: FloatArray, alpha: float, beta: float, max_phi: float,

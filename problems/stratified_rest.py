@@ -1,0 +1,152 @@
+r"""Two-layer stratified tank at rest: light fluid over heavy fluid, which must stay at rest.
+
+A tank ``length`` long holds heavy fluid (``rho_heavy``) below ``depth/2`` and light fluid
+(``rho_light``) above, to ``depth``, with a free surface (or a rigid lid, ``lid``). The exact
+state is rest with the hydrostatic pressure
+
+.. math:: p(y) = \rho_l g (D - y)\ (y > D/2),\qquad
+          p(y) = \rho_l g D/2 + \rho_h g (D/2 - y)\ (y < D/2).
+
+The slow flows of stratified fluids (gravity currents, internal waves) run at speeds of
+order ``sqrt(g' D)`` with ``g' = g Δρ/ρ_l`` and pressure differences of order ``Δρ g D``, far
+below the hydrostatic pressure ``ρ g D``: a weakly compressible solver must hold this state
+far more quietly than a single fluid. Monitored: ``max_speed_ratio`` — the largest particle
+speed over ``sqrt(g' D)``; ``pressure_rms_ratio`` — the RMS deviation of the particle pressures
+from the exact profile over ``Δρ g D`` (under a lid, after removing the mean deviation: the
+lid's pressure level is free). ``analyse`` reports both over the last ``settle`` seconds and
+their maxima.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mlsgalerkin.fluid import (
+    DensityDiffusion, DensityFilter, FluidBody, Gravity, MonaghanViscosity, ParticleShifting, Phase, TaitPressure,
+    Walls, hydrostatic_density, wall_box,
+)
+from mlsgalerkin.problem import require, require_nonnegative, require_positive
+from mlsgalerkin.scene import Approximation, Output, Probe, Scene
+
+__all__ = ["Parameters", "make_scene", "analyse", "check", "exact_pressure", "SMOKE"]
+
+SMOKE = {"dx": 0.006, "t_end": 0.05}
+
+
+@dataclass(frozen=True)
+class Parameters:
+    depth: float = 0.06            #: total depth D; the interface at D/2 (m)
+    length: float = 0.12           #: tank length (m)
+    rho_light: float = 1000.0      #: upper layer density (kg/m³)
+    rho_heavy: float = 1030.0      #: lower layer density (kg/m³)
+    dx: float = 0.003              #: particle spacing (m)
+    t_end: float = 5.0             #: end time (s)
+    c0: float = 0.0                #: sound speed; 0 picks 10 sqrt(g D) (m/s)
+    alpha: float = 0.02            #: Monaghan artificial viscosity α (–)
+    delta: float = 0.1             #: density diffusion δ (δ-SPH, same-phase pairs); 0 drops it (–)
+    shifting: str = "local"        #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
+    density_filter: int = 0        #: Shepard density filter every this many steps; 0 drops it (–)
+    lid: bool = False              #: rigid lid on top instead of a free surface (bool)
+    h_factor: float = 1.3          #: smoothing length / particle spacing, h/dx (–)
+    g: float = 9.81                #: gravitational acceleration (m/s²)
+    settle: float = 1.0            #: the final interval over which analyse averages (s)
+    frame_every: float = 0.25      #: time between VTU frames (s)
+    gif: bool = False              #: render animation.gif and final.png (bool)
+
+
+def sound_speed(p: Parameters) -> float:
+    """``c0`` (m/s): the parameter, or ``10 sqrt(g D)`` for ``c0 = 0``."""
+    return p.c0 if p.c0 > 0 else 10.0 * math.sqrt(p.g * p.depth)
+
+
+def exact_pressure(p: Parameters, y: np.ndarray) -> np.ndarray:
+    """The hydrostatic pressure (Pa) of the two layers at heights ``y`` (m)."""
+    half = 0.5 * p.depth
+    return np.where(y > half, p.rho_light * p.g * (p.depth - y),
+                    p.rho_light * p.g * half + p.rho_heavy * p.g * (half - y))
+
+
+def make_scene(p: Parameters = Parameters()) -> Scene:
+    light = Phase("light", p.rho_light)
+    heavy = Phase("heavy", p.rho_heavy)
+    body = FluidBody.block("fluid", (0.0, 0.0), (p.length, p.depth), p.dx, [light, heavy])
+    y = body.positions[:, 1]
+    body.phase[:] = (y < 0.5 * p.depth).astype(np.int64)
+    c0 = sound_speed(p)
+    overburden = np.where(body.phase == 1, p.rho_light * p.g * 0.5 * p.depth, 0.0)
+    depth_in_layer = np.where(body.phase == 1, 0.5 * p.depth - y, p.depth - y)
+    body.density[:] = hydrostatic_density(body.reference_density, depth_in_layer, p.g, c0, overburden)
+    top = p.depth if p.lid else 2.0 * p.depth
+    walls = wall_box((0.0, 0.0), (p.length, top), p.dx, layers=3, open_top=not p.lid,
+                     reference_density=p.rho_light)
+    g_reduced = p.g * (p.rho_heavy - p.rho_light) / p.rho_light
+    wave = math.sqrt(g_reduced * p.depth)
+    effects = [TaitPressure(c0, u_max=max(wave, 1e-9)), Gravity((0.0, -p.g)), Walls("free_slip")]
+    if p.alpha > 0:
+        effects.append(MonaghanViscosity(p.alpha, flow=(0.5 * wave, p.depth)))
+    if p.density_filter > 0:
+        effects.append(DensityFilter(p.density_filter))
+    if p.delta > 0:
+        effects.append(DensityDiffusion(p.delta))
+    if p.shifting != "off":
+        effects.append(ParticleShifting("local" if p.shifting == "local" else None))
+    n = body.n
+    scale = (p.rho_heavy - p.rho_light) * p.g * p.depth
+
+    def max_speed_ratio(state) -> float:
+        v = state.fluid.v[:n]
+        return float(np.sqrt(np.einsum("id,id->i", v, v).max()) / wave)
+
+    def pressure_rms_ratio(state) -> float:
+        s = state.fluid
+        dev = s.p[:n] - exact_pressure(p, s.x[:n, 1])
+        if p.lid:
+            dev = dev - dev.mean()
+        return float(np.sqrt(np.mean(dev**2)) / scale)
+
+    return Scene(
+        [body, walls], effects, t_end=p.t_end, name="stratified_rest",
+        approximation=Approximation(h_factor=p.h_factor),
+        output=Output(every=p.frame_every, probe_every=0.01, gif=p.gif, png=p.gif, color_by="pressure"),
+        probes=[Probe("max_speed_ratio", max_speed_ratio), Probe("pressure_rms_ratio", pressure_rms_ratio)],
+        parameters=dict(p.__dict__),
+    )
+
+
+def analyse(result, p: Parameters) -> dict:
+    """Spurious speed and pressure deviation: their maxima and their means over the last
+    ``settle`` seconds."""
+    ts = result.timeseries
+    t = np.asarray(ts["time"])
+    speed = np.asarray(ts["max_speed_ratio"])
+    pres = np.asarray(ts["pressure_rms_ratio"])
+    late = t >= t[-1] - p.settle
+    out = {
+        "max_speed_ratio": float(speed.max()), "late_max_speed_ratio": float(speed[late].max()),
+        "pressure_rms_ratio_max": float(pres.max()), "late_pressure_rms_ratio": float(pres[late].mean()),
+        "rows_per_depth": p.depth / p.dx, "t_end": float(t[-1]),
+    }
+    out["headline"] = (f"at rest for {t[-1]:.2f} s: largest speed {100 * out['max_speed_ratio']:.2f} % of sqrt(g' D) "
+                       f"(last {p.settle:g} s: {100 * out['late_max_speed_ratio']:.2f} %); pressure RMS deviation "
+                       f"{100 * out['late_pressure_rms_ratio']:.2f} % of drho g D over the last {p.settle:g} s "
+                       f"(largest {100 * out['pressure_rms_ratio_max']:.2f} %)")
+    return out
+
+
+def check(p: Parameters) -> list[str]:
+    """Problems with the parameters (see ``mlsgalerkin.problem``)."""
+    out = require_positive(p, "depth", "length", "rho_light", "rho_heavy", "dx", "t_end", "h_factor", "g", "settle",
+                           "frame_every")
+    out += require_nonnegative(p, "alpha", "delta", "c0", "density_filter")
+    out += require(p.shifting in ("local", "design", "off"),
+                   f"shifting = {p.shifting!r}: choose one of local, design, off")
+    if not out:
+        out += require(p.rho_heavy > p.rho_light,
+                       f"rho_heavy = {p.rho_heavy:g} must exceed rho_light = {p.rho_light:g} (heavy below light)")
+        out += require(p.depth >= 8 * p.dx,
+                       f"dx = {p.dx:g} m leaves fewer than 8 rows in the {p.depth:g} m depth; choose dx <= "
+                       f"{p.depth / 8:g} m")
+    return out
