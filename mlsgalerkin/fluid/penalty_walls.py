@@ -1,0 +1,336 @@
+r"""Rigid walls as penalty surfaces: the :class:`PenaltyWalls` effect, and the wall force sensors.
+
+A :class:`~mlsgalerkin.fluid.bodies.WallBody` may carry a
+:class:`~mlsgalerkin.contact.surface.ContactSurface` (``surface=``; ``wall_box(...,
+surface=True)`` adds a tank's inner surface), alone or with its wall particles. Every force
+evaluation, for every such wall, the fluid particles are slave nodes of a node-to-surface
+penalty contact against the wall's surface (rigid master, ``m* = M_s``; the kernel and its
+formulas are :mod:`mlsgalerkin.contact.penalty`):
+
+.. math::
+
+    g = (\mathbf x_s - \mathbf x_c)\cdot\mathbf n - g_0,\qquad
+    \mathbf f_s = \max\big(-k g - c\,\dot g,\ 0\big)\,\mathbf n \quad (-r < g < 0),\qquad
+    k = \alpha\,\frac{M_s}{\Delta t_{ref}^2},\quad c = 2\zeta\sqrt{k M_s},
+
+added to the nodal force of each fluid particle ``s`` (stage ``force``). Defaults: contact
+thickness ``g0 = Δx/2`` (a lattice particle next to a wall starts at ``g = 0``), reach
+``r = Δx`` (a particle up to half a spacing behind the surface is still pushed out; deeper,
+it is on the far side), ``α = 0.1``, ``ζ = 0.03``. The wall surface follows the wall's
+prescribed motion (the solver moves its nodes; ``ġ`` uses the wall's velocity).
+
+**Reference time step.** ``Δt_ref`` is fixed at the first force evaluation (``t = 0``) as
+``safety · min`` of the other listed effects' time-step limits (capped by ``dt_max``): the
+fluid's first stable step (the acoustic limit of the pressure model, in practice), unless
+given (``dt_ref=``). It is checkpointed, so a restart continues with the same stiffness, bit
+for bit. The effect's time-step limit is the constant
+:func:`~mlsgalerkin.contact.penalty.rigid_time_step` for up to ``d`` contacts per particle
+(``≈ 2.2 Δt_ref`` in 2D): it binds only if the step grows to twice the reference step.
+
+**Force sensors.** The reaction on each wall body, ``F = −Σ f_s`` (N/m in 2D, N in 3D), and
+its moment about ``moment_about`` (N·m/m in 2D; a vector in 3D; default the origin) are
+time-series columns ``wall_force_x_<body>``, ``wall_force_y_<body>`` (``_z_`` in 3D),
+``wall_moment_<body>`` (2D) or ``wall_moment_x|y|z_<body>`` (3D), with ``penalty_contacts``
+(active contact pairs over all walls) and ``penalty_max_penetration_dx`` (the deepest
+``−g`` in particle spacings). ``summary.json`` keeps per wall the peak force and when it
+occurred, and the deepest penetration of the run.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from mlsgalerkin.approximation.build import evaluate_shape_functions
+from mlsgalerkin.contact.penalty import (
+    DEFAULT_ALPHA,
+    DEFAULT_DAMPING,
+    DEFAULT_FEATURE_ANGLE,
+    check_penalty_parameters,
+    penalty_forces,
+    rigid_time_step,
+)
+from mlsgalerkin.fluid.bodies import FluidBody, WallBody
+from mlsgalerkin.fluid.effect import Effect
+from mlsgalerkin.fluid.state import FluidState
+from mlsgalerkin.kernels import get_kernel
+from mlsgalerkin.neighbors import find_neighbors
+
+if TYPE_CHECKING:  # pragma: no cover
+    from mlsgalerkin.scene import Scene
+
+__all__ = ["DISTRIBUTIONS", "PenaltyWalls", "sensor_columns", "spread_contact_forces"]
+
+#: How the force of a contact reaches the fluid (see :class:`PenaltyWalls`).
+DISTRIBUTIONS = ("auto", "node", "galerkin")
+
+
+def sensor_columns(body: str, dim: int) -> list[str]:
+    """The time-series columns of the force sensor of wall ``body``."""
+    axes = "xyz"[:dim]
+    moment = [f"wall_moment_{body}"] if dim == 2 else [f"wall_moment_{a}_{body}" for a in "xyz"]
+    return [f"wall_force_{a}_{body}" for a in axes] + moment
+
+
+class PenaltyWalls(Effect):
+    """Penalty contact of the fluid particles with every wall body that has a surface, and the
+    force sensors of those walls (module docstring).
+
+    Parameters
+    ----------
+    alpha : float
+        Stiffness factor ``(ω Δt_ref)²`` (–), default 0.1.
+    damping : float
+        Damping ratio ζ of the contact (fraction of critical, –), default 0.03.
+    thickness : float, optional
+        Contact thickness ``g0`` (m); default half the fluid spacing.
+    reach : float, optional
+        How deep behind the surface a particle is still pushed out, counted from ``g0`` (m);
+        default twice the thickness (one spacing).
+    dt_ref : float, optional
+        Reference time step of the stiffness (s); default the fluid's first stable step.
+    feature_angle : float
+        Facets closer than this (degrees) act as one smooth surface; default 30.
+    moment_about : (d,) point or dict of body name to point, optional
+        Where the moment on each wall is taken (m); default the origin.
+    distribution : str
+        Where the force of a contact acts on the fluid: ``"node"`` on the slave particle (plain
+        node-to-surface contact), ``"galerkin"`` spread over the fluid nodes with the MLS shape
+        functions at the contact point (:func:`spread_contact_forces`), or ``"auto"`` (default):
+        ``"node"`` against a wall that has wall particles (the penalty is a backstop there),
+        ``"galerkin"`` against a wall that is only a surface.
+    """
+
+    name = "penalty_walls"
+    stages = ("force",)
+    reads = ("positions", "velocity", "mass")
+    provides = ("wall_surface_contact",)
+
+    def __init__(self, alpha: float = DEFAULT_ALPHA, damping: float = DEFAULT_DAMPING, thickness: float | None = None,
+                 reach: float | None = None, dt_ref: float | None = None, feature_angle: float = DEFAULT_FEATURE_ANGLE,
+                 moment_about: ArrayLike | dict[str, ArrayLike] | None = None, distribution: str = "auto") -> None:
+        self.alpha, self.damping = alpha, damping
+        self.distribution = distribution
+        self.thickness, self.reach, self.dt_ref = thickness, reach, dt_ref
+        self.feature_angle = feature_angle
+        self.moment_about = moment_about
+        self._dt_ref: float | None = dt_ref
+        self._walls: list[str] = []
+        self._reset_records()
+
+    def _reset_records(self) -> None:
+        self.records: dict[str, dict[str, Any]] = {}
+        self.max_penetration = 0.0
+        self.time_of_max_penetration: float | None = None
+        self.max_contacts = 0
+
+    def __repr__(self) -> str:
+        about = self.moment_about
+        if isinstance(about, dict):
+            about = {k: np.asarray(v, dtype=float).tolist() for k, v in sorted(about.items())}
+        elif about is not None:
+            about = np.asarray(about, dtype=float).tolist()
+        return (f"PenaltyWalls(alpha={self.alpha!r}, damping={self.damping!r}, thickness={self.thickness!r}, "
+                f"reach={self.reach!r}, dt_ref={self.dt_ref!r}, feature_angle={self.feature_angle!r}, "
+                f"moment_about={about!r}, distribution={self.distribution!r})")
+
+    # ------------------------------------------------------------------ validation
+    def check(self, scene: "Scene") -> list[str]:
+        out = check_penalty_parameters("PenaltyWalls", self.alpha, self.damping, self.thickness, self.reach,
+                                       self.feature_angle, self.dt_ref)
+        if self.distribution not in DISTRIBUTIONS:
+            out.append(f"PenaltyWalls: distribution must be one of {list(DISTRIBUTIONS)}, got {self.distribution!r}")
+        walls = [w for w in scene.bodies_of(WallBody) if w.surface is not None]
+        if not walls:
+            out.append("PenaltyWalls: no wall body has a penalty surface; give one a surface (wall_box(..., "
+                       "surface=True), or WallBody(..., surface=ContactSurface.tank(...))) or remove PenaltyWalls")
+        for w in walls:
+            if w.surface.dim != scene.dim:
+                out.append(f"PenaltyWalls: the surface of wall body {w.name!r} is {w.surface.dim}D but the scene is "
+                           f"{scene.dim}D")
+        names = {w.name for w in walls}
+        about = self.moment_about
+        points = about.items() if isinstance(about, dict) else ([("all walls", about)] if about is not None else [])
+        for key, point in points:
+            if isinstance(about, dict) and key not in names:
+                out.append(f"PenaltyWalls: moment_about names {key!r}, which is not a wall body with a surface "
+                           f"({sorted(names)})")
+            p = np.asarray(point, dtype=float) if np.ndim(point) else np.zeros(0)
+            if p.shape != (scene.dim,) or not np.all(np.isfinite(p)):
+                out.append(f"PenaltyWalls: moment_about for {key} must be a finite ({scene.dim},) point, got {point!r}")
+        if out:
+            return out
+        fluids = scene.bodies_of(FluidBody)
+        if fluids and walls:
+            out.extend(self._starting_penetrations(fluids, walls))
+        return out
+
+    def _starting_penetrations(self, fluids: list[FluidBody], walls: list[WallBody]) -> list[str]:
+        """Fluid particles that start behind a wall surface (within the reach): they would be
+        thrown out by the full penalty force at the first step."""
+        out = []
+        dx = fluids[0].spacing
+        g0, reach = self._lengths(dx)
+        x = np.concatenate([b.positions for b in fluids])
+        for w in walls:
+            res = penalty_forces(x, np.zeros_like(x), 1.0, w.surface.nodes, None, None, w.surface.facets,
+                                 dt_ref=1.0, thickness=g0, reach=reach, feature_angle=self.feature_angle)
+            behind = np.flatnonzero(res.gaps < -g0 - 1e-9 * dx)
+            if behind.size:
+                k = int(behind[np.argmin(res.gaps[behind])])
+                out.append(f"PenaltyWalls: {behind.size} fluid particles start behind the penalty surface of wall "
+                           f"body {w.name!r} (the deepest at {np.round(x[k], 6).tolist()}, "
+                           f"{(-res.gaps[k] - g0) / dx:.2f} spacings behind): the fluid reaches into the wall; place "
+                           "it in front of the surface, half a spacing away as lattice() and wall_box() do")
+        return out
+
+    def _lengths(self, dx: float) -> tuple[float, float]:
+        g0 = 0.5 * dx if self.thickness is None else float(self.thickness)
+        reach = (2.0 * g0 if g0 > 0 else dx) if self.reach is None else float(self.reach)
+        return g0, reach
+
+    # ------------------------------------------------------------------ set-up
+    def setup(self, state: FluidState, scene: "Scene") -> None:
+        walls = [w for w in scene.bodies_of(WallBody) if w.surface is not None]
+        self._walls = [w.name for w in walls]
+        self._galerkin = {w.name: self.distribution == "galerkin" or (self.distribution == "auto" and w.n == 0)
+                          for w in walls}
+        ap = scene.approximation
+        self._approximation = (get_kernel(ap.kernel), ap.method, ap.condition_limit)
+        self._g0, self._reach = self._lengths(state.spacing)
+        d = state.dim
+        about = self.moment_about
+        self._centre = {}
+        for name in self._walls:
+            point = about.get(name) if isinstance(about, dict) else about
+            self._centre[name] = np.zeros(d) if point is None else np.asarray(point, dtype=float)
+        self._others = [e for e in scene.effects if e is not self]
+        self._safety, self._dt_max = scene.safety, scene.dt_max
+        self._spacing = state.spacing
+        self._dim = d
+        for name in self._walls:
+            for col in sensor_columns(name, d):
+                state.sensors[col] = 0.0
+        state.sensors["penalty_contacts"] = 0
+        state.sensors["penalty_max_penetration_dx"] = 0.0
+        self._reset_records()
+        self.records = {name: {"peak_force": 0.0, "time_of_peak_force_s": None, "peak_force_vector": [0.0] * d,
+                               "max_abs_moment": 0.0} for name in self._walls}
+
+    def _reference_step(self, s: FluidState) -> float:
+        """``safety · min`` of the other effects' limits (and ``dt_max``) now."""
+        dt = self._safety * min([e.time_step_limit(s) for e in self._others] + [math.inf])
+        if self._dt_max is not None:
+            dt = min(dt, self._dt_max)
+        if not (math.isfinite(dt) and dt > 0):
+            raise ValueError("PenaltyWalls: no reference time step for the penalty stiffness (no other effect limits "
+                             f"the step, got {dt!r}); give PenaltyWalls(dt_ref=...) or scene.dt_max")
+        return float(dt)
+
+    # ------------------------------------------------------------------ the force stage
+    def force(self, s: FluidState) -> None:
+        if self._dt_ref is None:
+            self._dt_ref = self._reference_step(s)
+        f = s.fluid
+        x, v, M = s.x[f], s.v[f], s.M[f]
+        contacts = 0
+        deepest = 0.0
+        for name in self._walls:
+            surf = s.wall_surfaces[name]
+            res = penalty_forces(x, v, M, surf.x, surf.v, None, surf.facets, dt_ref=self._dt_ref,
+                                 thickness=self._g0, reach=self._reach, alpha=self.alpha, damping=self.damping,
+                                 feature_angle=self.feature_angle, centre=self._centre[name])
+            if self._galerkin[name]:
+                _, xc, fc = res.contact_points(surf.x, surf.facets)
+                spread_contact_forces(s, xc, fc, *self._approximation)
+            else:
+                s.force[f] += res.slave_forces
+            cols = sensor_columns(name, self._dim)
+            for a in range(self._dim):
+                s.sensors[cols[a]] = float(res.total_force[a])
+            moments = [res.moment] if self._dim == 2 else list(res.moment)
+            for c, m in zip(cols[self._dim:], moments):
+                s.sensors[c] = float(m)
+            rec = self.records[name]
+            magnitude = float(np.sqrt(res.total_force @ res.total_force))
+            if magnitude > rec["peak_force"]:
+                rec["peak_force"], rec["time_of_peak_force_s"] = magnitude, float(s.t)
+                rec["peak_force_vector"] = res.total_force.tolist()
+            rec["max_abs_moment"] = max(rec["max_abs_moment"], float(np.max(np.abs(moments))))
+            contacts += res.contacts
+            deepest = max(deepest, res.max_penetration)
+        s.sensors["penalty_contacts"] = int(contacts)
+        s.sensors["penalty_max_penetration_dx"] = deepest / self._spacing
+        self.max_contacts = max(self.max_contacts, contacts)
+        if deepest > self.max_penetration:
+            self.max_penetration, self.time_of_max_penetration = deepest, float(s.t)
+
+    def time_step_limit(self, s: FluidState) -> float:
+        if self._dt_ref is None:
+            return math.inf
+        return rigid_time_step(self.alpha, self.damping, self._dt_ref, s.dim)
+
+    # ------------------------------------------------------------------ report and restart
+    def summary(self) -> dict[str, Any]:
+        if self._dt_ref is None:
+            return {}
+        return {
+            "alpha": self.alpha, "damping": self.damping, "thickness_m": self._g0, "reach_m": self._reach,
+            "feature_angle_deg": self.feature_angle, "dt_ref_s": self._dt_ref,
+            "distribution": {k: "galerkin" if v else "node" for k, v in self._galerkin.items()},
+            "stiffness_per_kg_N_per_m_kg": self.alpha / self._dt_ref**2,
+            "time_step_limit_s": rigid_time_step(self.alpha, self.damping, self._dt_ref, self._dim),
+            "max_penetration_m": self.max_penetration, "max_penetration_dx": self.max_penetration / self._spacing,
+            "time_of_max_penetration_s": self.time_of_max_penetration, "max_active_contacts": self.max_contacts,
+            "walls": self.records,
+        }
+
+    def state_dict(self) -> dict[str, Any]:
+        return {"dt_ref": self._dt_ref, "records": self.records, "max_penetration": self.max_penetration,
+                "time_of_max_penetration": self.time_of_max_penetration, "max_contacts": self.max_contacts}
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        if not d:
+            return
+        self._dt_ref = d["dt_ref"]
+        self.records = {k: dict(v) for k, v in d["records"].items()}
+        self.max_penetration = float(d["max_penetration"])
+        self.time_of_max_penetration = d["time_of_max_penetration"]
+        self.max_contacts = int(d["max_contacts"])
+
+
+def spread_contact_forces(s: FluidState, points: np.ndarray, forces: np.ndarray, kernel, method: str,
+                          condition_limit: float) -> None:
+    r"""Add contact forces acting at wall points to the fluid nodes the Galerkin way.
+
+    The weak form's boundary term of a traction :math:`\mathbf t` on the wall is
+    :math:`\int_\Gamma N_j\,\mathbf t\,d\Gamma`. With the contact points as quadrature points
+    and each contact force :math:`\mathbf F_c` (N, per unit depth in 2D) as the traction times
+    its share of the wall, the fluid node ``j`` receives
+
+    .. math:: \mathbf f_j \mathrel{+}= \sum_c N_j(\mathbf x_c)\,\mathbf F_c,
+
+    with the MLS (or RKPM) shape functions of the fluid nodes evaluated at the contact points
+    ``points (P, d)`` (m). ``Σ_j N_j = 1`` and ``Σ_j N_j x_j = x_c`` (linear reproduction), so
+    the total force and its moment are those of the contact forces. Without wall particles the
+    nodal-integrated internal force of a pressure ``p`` on the fluid's boundary rows is this
+    same term with ``t = −p n`` (for linear MLS the two rows next to a wall get about
+    ``−1.5 pΔx`` and ``+0.5 pΔx``): applied at the slave particles instead, the reaction leaves
+    half a ``pΔx`` unbalanced on the second row (``docs/theory/contact.md``).
+    """
+    if points.shape[0] == 0:
+        return
+    f = s.fluid
+    nodes = np.ascontiguousarray(s.x[f])
+    h = np.ascontiguousarray(s.h[f])
+    xc = np.ascontiguousarray(points)
+    nb = find_neighbors(xc, nodes, node_radius=kernel.support * h)
+    volumes = np.ascontiguousarray(s.M[f] / s.rho[f]) if method == "rkpm" else None
+    table = evaluate_shape_functions(xc, nodes, h, nb, kernel, s.approximation_order, method, volumes,
+                                     condition_limit=condition_limit)
+    rows = np.repeat(np.arange(xc.shape[0]), np.diff(table.indptr))
+    for a in range(s.dim):
+        s.force[f, a] += np.bincount(table.indices, weights=table.values * forces[rows, a], minlength=s.n_fluid)
