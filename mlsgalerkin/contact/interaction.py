@@ -56,8 +56,9 @@ class PenaltyContact(Interaction):
     thickness : float
         Contact thickness ``g0`` (m): half the particle spacing for particles, 0 for nodes.
     reach : float, optional
-        How deep behind the master surface (beyond ``g0``) a slave is still pushed out (m);
-        default ``2 g0``. Must be positive.
+        How far from ``g0`` toward and behind the master surface a slave is still pushed out
+        (m; active if ``−reach < g < 0``); default ``2 g0``, required when ``g0 = 0``. Must
+        exceed ``g0``.
     alpha : float
         Stiffness factor ``(ω Δt_ref)²`` (–), default 0.1.
     damping : float
@@ -78,7 +79,9 @@ class PenaltyContact(Interaction):
                  name: str = "contact") -> None:
         self.first, self.second, self.name = slave, master, name
         self.thickness = thickness
-        self.reach = 2.0 * thickness if reach is None and isinstance(thickness, (int, float)) else reach
+        if reach is None and isinstance(thickness, (int, float)) and thickness > 0:
+            reach = 2.0 * thickness  # nodes without a thickness have no natural reach: asked for
+        self.reach = reach
         self.alpha, self.damping, self.feature_angle = alpha, damping, feature_angle
         self.dt_ref = dt_ref
         self.moment_about = None if moment_about is None else np.asarray(moment_about, dtype=float)

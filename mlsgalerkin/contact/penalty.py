@@ -76,6 +76,7 @@ version for the tests.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numba
@@ -124,7 +125,7 @@ def check_penalty_parameters(owner: str, alpha: float, damping: float, thickness
     """Problems with penalty parameters (empty if none); ``None`` thickness/reach/dt_ref mean
     "chosen later" and are accepted."""
     out = []
-    ok = lambda v: isinstance(v, (int, float)) and math.isfinite(v)  # noqa: E731
+    ok = lambda v: isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v)  # noqa: E731
     if not (ok(alpha) and alpha > 0):
         out.append(f"{owner}: alpha (the stiffness factor (ω Δt_ref)², k = α m*/Δt_ref²) must be positive, "
                    f"got {alpha!r}; 0.01–0.2 is usual, default {DEFAULT_ALPHA}")
@@ -415,6 +416,8 @@ def _gather(pf, pw, pn, pg, pk, pfn, xm, facets, centre, master_f, total, moment
 # ---------------------------------------------------------------------------------- API
 def _prepare(slave_x, slave_v, slave_m, master_x, master_v, master_m, facets):
     xs = np.ascontiguousarray(slave_x, dtype=np.float64)
+    if xs.ndim != 2 or xs.shape[1] not in (2, 3):
+        raise ValueError(f"penalty_forces: slave positions must be an (n, 2) or (n, 3) array, got shape {xs.shape}")
     n, d = xs.shape
     vs = np.ascontiguousarray(slave_v, dtype=np.float64)
     ms = np.ascontiguousarray(np.broadcast_to(np.asarray(slave_m, dtype=np.float64), (n,)))
@@ -429,7 +432,23 @@ def _prepare(slave_x, slave_v, slave_m, master_x, master_v, master_m, facets):
         raise ValueError(f"penalty_forces: slave positions {xs.shape}, velocities {vs.shape}, master nodes "
                          f"{xm.shape} and facets {f.shape} must share one dimension d (2 or 3): (n, d), (n, d), "
                          "(m, d), (k, d)")
+    if f.size and (f.min() < 0 or f.max() >= xm.shape[0]):
+        raise ValueError(f"penalty_forces: facet node indices must lie in [0, {xm.shape[0]}), got {int(f.min())} to "
+                         f"{int(f.max())}")
+    if not np.all(ms > 0) or (not rigid and not np.all(mm > 0)):
+        raise ValueError("penalty_forces: slave and master masses must be positive (kg; master_m=None for a rigid "
+                         "master), the stiffness k = alpha m*/dt_ref^2 needs them")
     return xs, vs, ms, xm, vm, mm, rigid, f
+
+
+def _check_scalars(alpha, damping, thickness, reach, feature_angle, dt_ref) -> None:
+    """Raise ``ValueError`` listing every bad scalar parameter of :func:`penalty_forces`."""
+    problems = check_penalty_parameters("penalty_forces", alpha, damping, thickness, reach, feature_angle, dt_ref)
+    for name, value in (("thickness", thickness), ("reach", reach), ("dt_ref", dt_ref)):
+        if value is None:
+            problems.append(f"penalty_forces: {name} is required")
+    if problems:
+        raise ValueError("; ".join(problems))
 
 
 def _stable_dt(slave_k, node_k, ms, mm, rigid, damping):
@@ -480,6 +499,7 @@ def penalty_forces(
         Broad-phase pairs (:func:`~mlsgalerkin.contact.search.candidate_pairs` with
         :func:`search_margin`); computed if not given.
     """
+    _check_scalars(alpha, damping, thickness, reach, feature_angle, dt_ref)
     xs, vs, ms, xm, vm, mm, rigid, f = _prepare(slave_x, slave_v, slave_m, master_x, master_v, master_m, facets)
     n, d = xs.shape
     if candidates is None:
@@ -520,6 +540,7 @@ def penalty_forces_reference(
     """Numpy version of :func:`penalty_forces` (a loop over slaves; tests only)."""
     from mlsgalerkin.contact.geometry import closest_points_reference
 
+    _check_scalars(alpha, damping, thickness, reach, feature_angle, dt_ref)
     xs, vs, ms, xm, vm, mm, rigid, f = _prepare(slave_x, slave_v, slave_m, master_x, master_v, master_m, facets)
     n, d = xs.shape
     indptr, indices = candidate_pairs_reference(xs, xm, f, search_margin(thickness, reach))

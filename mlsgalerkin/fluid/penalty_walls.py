@@ -13,11 +13,22 @@ formulas are :mod:`mlsgalerkin.contact.penalty`):
     \mathbf f_s = \max\big(-k g - c\,\dot g,\ 0\big)\,\mathbf n \quad (-r < g < 0),\qquad
     k = \alpha\,\frac{M_s}{\Delta t_{ref}^2},\quad c = 2\zeta\sqrt{k M_s},
 
-added to the nodal force of each fluid particle ``s`` (stage ``force``). Defaults: contact
+added to the nodal force of each fluid particle ``s`` (stage ``force``; the reaction ``−f_s`` on
+the rigid wall is the force sensor below). Defaults: contact
 thickness ``g0 = Δx/2`` (a lattice particle next to a wall starts at ``g = 0``), reach
 ``r = Δx`` (a particle up to half a spacing behind the surface is still pushed out; deeper,
 it is on the far side), ``α = 0.1``, ``ζ = 0.03``. The wall surface follows the wall's
 prescribed motion (the solver moves its nodes; ``ġ`` uses the wall's velocity).
+
+**Walls need their particles.** The penalty keeps particles out of a wall; it does not replace
+the wall particles (:class:`~mlsgalerkin.fluid.walls.Walls`), which close the fluid's nodal
+Galerkin sums at the wall. Without them the two particle rows next to the wall carry the
+boundary term of the pressure, about ``−1.5 pΔx`` and ``+0.5 pΔx`` per particle for linear MLS,
+which a force on the touching particle alone cannot balance: a hydrostatic column on a
+surface-only floor settles with its near-wall pressure wrong by tens of per cent of ``ρgH``
+(measured in ``docs/theory/contact.md``). So list both, ``Walls()`` and ``PenaltyWalls()``, on
+``wall_box(..., surface=True)``; a wall that is only a surface (``layers=0``) is for obstacles
+that spray touches briefly, and :class:`SurfaceOnlyWallWarning` says so at set-up.
 
 **Reference time step.** ``Δt_ref`` is fixed at the first force evaluation (``t = 0``) as
 ``safety · min`` of the other listed effects' time-step limits (capped by ``dt_max``): the
@@ -39,12 +50,12 @@ occurred, and the deepest penetration of the run.
 from __future__ import annotations
 
 import math
+import warnings
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mlsgalerkin.approximation.build import evaluate_shape_functions
 from mlsgalerkin.contact.penalty import (
     DEFAULT_ALPHA,
     DEFAULT_DAMPING,
@@ -56,16 +67,16 @@ from mlsgalerkin.contact.penalty import (
 from mlsgalerkin.fluid.bodies import FluidBody, WallBody
 from mlsgalerkin.fluid.effect import Effect
 from mlsgalerkin.fluid.state import FluidState
-from mlsgalerkin.kernels import get_kernel
-from mlsgalerkin.neighbors import find_neighbors
 
 if TYPE_CHECKING:  # pragma: no cover
     from mlsgalerkin.scene import Scene
 
-__all__ = ["DISTRIBUTIONS", "PenaltyWalls", "sensor_columns", "spread_contact_forces"]
+__all__ = ["PenaltyWalls", "SurfaceOnlyWallWarning", "sensor_columns"]
 
-#: How the force of a contact reaches the fluid (see :class:`PenaltyWalls`).
-DISTRIBUTIONS = ("auto", "node", "galerkin")
+
+class SurfaceOnlyWallWarning(UserWarning):
+    """A wall body of a ``PenaltyWalls`` scene has a penalty surface but no wall particles: the
+    fluid's pressure next to it is wrong wherever the fluid rests on it (module docstring)."""
 
 
 def sensor_columns(body: str, dim: int) -> list[str]:
@@ -96,12 +107,9 @@ class PenaltyWalls(Effect):
         Facets closer than this (degrees) act as one smooth surface; default 30.
     moment_about : (d,) point or dict of body name to point, optional
         Where the moment on each wall is taken (m); default the origin.
-    distribution : str
-        Where the force of a contact acts on the fluid: ``"node"`` on the slave particle (plain
-        node-to-surface contact), ``"galerkin"`` spread over the fluid nodes with the MLS shape
-        functions at the contact point (:func:`spread_contact_forces`), or ``"auto"`` (default):
-        ``"node"`` against a wall that has wall particles (the penalty is a backstop there),
-        ``"galerkin"`` against a wall that is only a surface.
+
+    >>> PenaltyWalls()
+    PenaltyWalls(alpha=0.1, damping=0.03, thickness=None, reach=None, dt_ref=None, feature_angle=30.0, moment_about=None)
     """
 
     name = "penalty_walls"
@@ -111,9 +119,8 @@ class PenaltyWalls(Effect):
 
     def __init__(self, alpha: float = DEFAULT_ALPHA, damping: float = DEFAULT_DAMPING, thickness: float | None = None,
                  reach: float | None = None, dt_ref: float | None = None, feature_angle: float = DEFAULT_FEATURE_ANGLE,
-                 moment_about: ArrayLike | dict[str, ArrayLike] | None = None, distribution: str = "auto") -> None:
+                 moment_about: ArrayLike | dict[str, ArrayLike] | None = None) -> None:
         self.alpha, self.damping = alpha, damping
-        self.distribution = distribution
         self.thickness, self.reach, self.dt_ref = thickness, reach, dt_ref
         self.feature_angle = feature_angle
         self.moment_about = moment_about
@@ -135,14 +142,12 @@ class PenaltyWalls(Effect):
             about = np.asarray(about, dtype=float).tolist()
         return (f"PenaltyWalls(alpha={self.alpha!r}, damping={self.damping!r}, thickness={self.thickness!r}, "
                 f"reach={self.reach!r}, dt_ref={self.dt_ref!r}, feature_angle={self.feature_angle!r}, "
-                f"moment_about={about!r}, distribution={self.distribution!r})")
+                f"moment_about={about!r})")
 
     # ------------------------------------------------------------------ validation
     def check(self, scene: "Scene") -> list[str]:
         out = check_penalty_parameters("PenaltyWalls", self.alpha, self.damping, self.thickness, self.reach,
                                        self.feature_angle, self.dt_ref)
-        if self.distribution not in DISTRIBUTIONS:
-            out.append(f"PenaltyWalls: distribution must be one of {list(DISTRIBUTIONS)}, got {self.distribution!r}")
         walls = [w for w in scene.bodies_of(WallBody) if w.surface is not None]
         if not walls:
             out.append("PenaltyWalls: no wall body has a penalty surface; give one a surface (wall_box(..., "
@@ -196,10 +201,14 @@ class PenaltyWalls(Effect):
     def setup(self, state: FluidState, scene: "Scene") -> None:
         walls = [w for w in scene.bodies_of(WallBody) if w.surface is not None]
         self._walls = [w.name for w in walls]
-        self._galerkin = {w.name: self.distribution == "galerkin" or (self.distribution == "auto" and w.n == 0)
-                          for w in walls}
-        ap = scene.approximation
-        self._approximation = (get_kernel(ap.kernel), ap.method, ap.condition_limit)
+        bare = [w.name for w in walls if w.n == 0]
+        if bare:
+            warnings.warn(
+                f"PenaltyWalls: wall bodies {bare} are only a penalty surface, without wall particles: the fluid's "
+                "Galerkin sums are not closed there, and where the fluid rests on such a wall its pressure is wrong "
+                "(a hydrostatic column on a surface-only floor: tens of per cent of rho g H, docs/theory/contact.md). "
+                "For walls that hold fluid use wall_box(..., layers=3, surface=True) with Walls() and PenaltyWalls()",
+                SurfaceOnlyWallWarning, stacklevel=2)
         self._g0, self._reach = self._lengths(state.spacing)
         d = state.dim
         about = self.moment_about
@@ -243,11 +252,7 @@ class PenaltyWalls(Effect):
             res = penalty_forces(x, v, M, surf.x, surf.v, None, surf.facets, dt_ref=self._dt_ref,
                                  thickness=self._g0, reach=self._reach, alpha=self.alpha, damping=self.damping,
                                  feature_angle=self.feature_angle, centre=self._centre[name])
-            if self._galerkin[name]:
-                _, xc, fc = res.contact_points(surf.x, surf.facets)
-                spread_contact_forces(s, xc, fc, *self._approximation)
-            else:
-                s.force[f] += res.slave_forces
+            s.force[f] += res.slave_forces
             cols = sensor_columns(name, self._dim)
             for a in range(self._dim):
                 s.sensors[cols[a]] = float(res.total_force[a])
@@ -280,7 +285,6 @@ class PenaltyWalls(Effect):
         return {
             "alpha": self.alpha, "damping": self.damping, "thickness_m": self._g0, "reach_m": self._reach,
             "feature_angle_deg": self.feature_angle, "dt_ref_s": self._dt_ref,
-            "distribution": {k: "galerkin" if v else "node" for k, v in self._galerkin.items()},
             "stiffness_per_kg_N_per_m_kg": self.alpha / self._dt_ref**2,
             "time_step_limit_s": rigid_time_step(self.alpha, self.damping, self._dt_ref, self._dim),
             "max_penetration_m": self.max_penetration, "max_penetration_dx": self.max_penetration / self._spacing,
@@ -301,36 +305,3 @@ class PenaltyWalls(Effect):
         self.time_of_max_penetration = d["time_of_max_penetration"]
         self.max_contacts = int(d["max_contacts"])
 
-
-def spread_contact_forces(s: FluidState, points: np.ndarray, forces: np.ndarray, kernel, method: str,
-                          condition_limit: float) -> None:
-    r"""Add contact forces acting at wall points to the fluid nodes the Galerkin way.
-
-    The weak form's boundary term of a traction :math:`\mathbf t` on the wall is
-    :math:`\int_\Gamma N_j\,\mathbf t\,d\Gamma`. With the contact points as quadrature points
-    and each contact force :math:`\mathbf F_c` (N, per unit depth in 2D) as the traction times
-    its share of the wall, the fluid node ``j`` receives
-
-    .. math:: \mathbf f_j \mathrel{+}= \sum_c N_j(\mathbf x_c)\,\mathbf F_c,
-
-    with the MLS (or RKPM) shape functions of the fluid nodes evaluated at the contact points
-    ``points (P, d)`` (m). ``Σ_j N_j = 1`` and ``Σ_j N_j x_j = x_c`` (linear reproduction), so
-    the total force and its moment are those of the contact forces. Without wall particles the
-    nodal-integrated internal force of a pressure ``p`` on the fluid's boundary rows is this
-    same term with ``t = −p n`` (for linear MLS the two rows next to a wall get about
-    ``−1.5 pΔx`` and ``+0.5 pΔx``): applied at the slave particles instead, the reaction leaves
-    half a ``pΔx`` unbalanced on the second row (``docs/theory/contact.md``).
-    """
-    if points.shape[0] == 0:
-        return
-    f = s.fluid
-    nodes = np.ascontiguousarray(s.x[f])
-    h = np.ascontiguousarray(s.h[f])
-    xc = np.ascontiguousarray(points)
-    nb = find_neighbors(xc, nodes, node_radius=kernel.support * h)
-    volumes = np.ascontiguousarray(s.M[f] / s.rho[f]) if method == "rkpm" else None
-    table = evaluate_shape_functions(xc, nodes, h, nb, kernel, s.approximation_order, method, volumes,
-                                     condition_limit=condition_limit)
-    rows = np.repeat(np.arange(xc.shape[0]), np.diff(table.indptr))
-    for a in range(s.dim):
-        s.force[f, a] += np.bincount(table.indices, weights=table.values * forces[rows, a], minlength=s.n_fluid)
