@@ -479,6 +479,14 @@ def test_broad_phase_finds_the_same_pairs_as_brute_force(case, margin):
     assert set(zip(s[near].tolist(), j[near].tolist())) <= found
 
 
+def test_broad_phase_boxes_are_closed():
+    """A slave exactly ``margin`` from a facet, on the face of its grown box, is a candidate."""
+    surf = floor(2)
+    x = np.array([[0.0, 0.25], [0.0, -0.25], [1.25, 0.0], [0.0, 0.2500001], [-1.2500001, 0.0]])
+    for find in (candidate_pairs, candidate_pairs_reference):
+        assert np.diff(find(x, surf.nodes, surf.facets, 0.25)[0]).tolist() == [1, 1, 1, 0, 0]
+
+
 @pytest.mark.parametrize("layout", ["a fine mesh", "scattered tiny facets"])
 def test_broad_phase_on_large_and_sparse_meshes(layout, rng):
     """A 1800-triangle height field with 5000 slaves (some far away), and 40 tiny triangles

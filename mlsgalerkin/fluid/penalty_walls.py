@@ -79,6 +79,10 @@ class SurfaceOnlyWallWarning(UserWarning):
     fluid's pressure next to it is wrong wherever the fluid rests on it (module docstring)."""
 
 
+#: How deep behind a wall surface (in particle spacings) the check before step 1 looks for fluid.
+START_CHECK_DEPTH = 10.0
+
+
 def sensor_columns(body: str, dim: int) -> list[str]:
     """The time-series columns of the force sensor of wall ``body``."""
     axes = "xyz"[:dim]
@@ -174,15 +178,16 @@ class PenaltyWalls(Effect):
         return out
 
     def _starting_penetrations(self, fluids: list[FluidBody], walls: list[WallBody]) -> list[str]:
-        """Fluid particles that start behind a wall surface (within the reach): they would be
-        thrown out by the full penalty force at the first step."""
+        """Fluid particles that start behind a wall surface (up to :data:`START_CHECK_DEPTH`
+        spacings deep): within the reach the full penalty force would throw them out at the
+        first step, deeper they would stay on the far side for good."""
         out = []
         dx = fluids[0].spacing
-        g0, reach = self._lengths(dx)
+        g0, _ = self._lengths(dx)
         x = np.concatenate([b.positions for b in fluids])
         for w in walls:
-            res = penalty_forces(x, np.zeros_like(x), 1.0, w.surface.nodes, None, None, w.surface.facets,
-                                 dt_ref=1.0, thickness=g0, reach=reach, feature_angle=self.feature_angle)
+            res = penalty_forces(x, np.zeros_like(x), 1.0, w.surface.nodes, None, None, w.surface.facets, dt_ref=1.0,
+                                 thickness=g0, reach=g0 + START_CHECK_DEPTH * dx, feature_angle=self.feature_angle)
             behind = np.flatnonzero(res.gaps < -g0 - 1e-9 * dx)
             if behind.size:
                 k = int(behind[np.argmin(res.gaps[behind])])
