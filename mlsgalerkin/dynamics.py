@@ -182,3 +182,11 @@ class Interaction(ABC):
     def summary(self) -> dict[str, Any]:
         """Diagnostics for ``summary.json``."""
         return {}
+
+    def state_dict(self) -> dict[str, Any]:
+        """What a restart needs to continue bit for bit (JSON-serialisable; stored in every
+        checkpoint): e.g. a penalty stiffness fixed at the first exchange, running maxima."""
+        return {}
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        """Restore what :meth:`state_dict` returned (before the first step after a restart)."""

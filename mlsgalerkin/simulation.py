@@ -239,7 +239,8 @@ class Simulation:
         meta: dict[str, Any] = {"layout": CHECKPOINT_LAYOUT, "scene": self.scene.name, "t": st.t,
                                 "step": st.step, "dt": st.dt, "parameters": to_jsonable(self.scene.parameters),
                                 "identity": self.identity, "changes": self._changes, "solvers": {},
-                                "monitors": {m.name: m.state_dict() for m in self._monitors}}
+                                "monitors": {m.name: m.state_dict() for m in self._monitors},
+                                "interactions": [to_jsonable(i.state_dict()) for i in self.scene.interactions]}
         for s in self.solvers:
             a, m = s.checkpoint()
             arrays.update({f"{s.key}__{k}": v for k, v in a.items()})
@@ -269,6 +270,8 @@ class Simulation:
         for s in self.solvers:
             prefix = f"{s.key}__"
             s.restore({k[len(prefix):]: v for k, v in arrays.items() if k.startswith(prefix)}, meta["solvers"][s.key])
+        for i, d in zip(self.scene.interactions, meta.get("interactions", [])):
+            i.load_state_dict(d)  # in scene order (the scene is the one that wrote the checkpoint)
         st = self.state
         st.t, st.step, st.dt = float(meta["t"]), int(meta["step"]), float(meta["dt"])
         self._changes = list(meta.get("changes", []))

@@ -4,7 +4,8 @@
 module                                 contents
 =====================================  =======================================================
 :mod:`~mlsgalerkin.fluid.bodies`       :class:`FluidBody`, :class:`Phase`, :class:`WallBody`
-                                       (fixed or moving walls), :func:`lattice`, :func:`wall_box`
+                                       (particles and/or a penalty surface; fixed or moving),
+                                       :func:`lattice`, :func:`wall_box`
 :mod:`~mlsgalerkin.fluid.state`        :class:`FluidState`, the flat particle arrays
 :mod:`~mlsgalerkin.fluid.solver`       :class:`FluidSolver`: neighbours, shape functions,
                                        kinematics, dynamics, time step, checkpoints
@@ -15,6 +16,8 @@ module                                 contents
 :mod:`~mlsgalerkin.fluid.viscosity`    :class:`NewtonianViscosity`, :class:`BulkViscosity`
 :mod:`~mlsgalerkin.fluid.pair_viscosity`  :class:`MonaghanViscosity` and its numba kernel
 :mod:`~mlsgalerkin.fluid.walls`        :class:`Walls` and the wall-state kernel
+:mod:`~mlsgalerkin.fluid.penalty_walls`  :class:`PenaltyWalls`: walls as penalty contact
+                                       surfaces, and the wall force sensors
 :mod:`~mlsgalerkin.fluid.filters`      :class:`DensityFilter` and its kernels
 :mod:`~mlsgalerkin.fluid.density_diffusion`  :class:`DensityDiffusion` (δ-SPH) and its kernel
 :mod:`~mlsgalerkin.fluid.shifting`     :class:`ParticleShifting` and its kernel
@@ -55,6 +58,7 @@ from mlsgalerkin.fluid.free_surface import FreeSurfaceDetection
 from mlsgalerkin.fluid.gravity import Gravity
 from mlsgalerkin.fluid.integrators import Integrator, KickDriftKick, PredictorCorrector
 from mlsgalerkin.fluid.pair_viscosity import MonaghanViscosity, NumericalViscosityWarning, numerical_viscosity
+from mlsgalerkin.fluid.penalty_walls import PenaltyWalls
 from mlsgalerkin.fluid.shifting import ParticleShifting
 from mlsgalerkin.fluid.solver import FluidSolver
 from mlsgalerkin.fluid.state import FluidState
@@ -87,6 +91,7 @@ __all__ = [
     "NumericalViscosityWarning",
     "ParticleLimitError",
     "ParticleShifting",
+    "PenaltyWalls",
     "Phase",
     "PredictorCorrector",
     "TaitEOS",

@@ -1,6 +1,6 @@
 r"""Bodies of a fluid scene: :class:`FluidBody` (moving particles, one or more phases) and
-:class:`WallBody` (wall particles, fixed or moving with a prescribed motion), plus lattice
-builders. Both are advanced by :class:`~mlsgalerkin.fluid.solver.FluidSolver`: wall particles
+:class:`WallBody` (wall particles and/or a penalty contact surface, fixed or moving with a
+prescribed motion), plus lattice builders. Both are advanced by :class:`~mlsgalerkin.fluid.solver.FluidSolver`: wall particles
 are nodes of the fluid's approximation.
 
 A particle carries a constant physical mass ``M = ρ_init · Δx^d`` (kg/m^(3-d) per unit depth
@@ -26,6 +26,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from mlsgalerkin.contact.surface import ContactSurface
 from mlsgalerkin.dynamics import Body
 from mlsgalerkin.motion import Motion
 from mlsgalerkin.neighbors import as_coordinates
@@ -187,15 +188,18 @@ class FluidBody(Body):
 
 @dataclass
 class WallBody(Body):
-    """Wall particles (several layers) with fluid-side normals, fixed or moving rigidly.
+    """A rigid wall: wall particles (several layers) with fluid-side normals, a penalty contact
+    surface, or both; fixed or moving rigidly.
 
     Parameters
     ----------
     name : str
-    positions : (n, d) array, m
-        Positions at ``t = 0`` (the reference configuration of ``motion``).
-    spacing : float
+    positions : (n, d) array, m, optional
+        Wall particle positions at ``t = 0`` (the reference configuration of ``motion``).
+        Omit (with ``spacing``) for a wall that is only a penalty ``surface``.
+    spacing : float, optional
         Wall particle spacing (m); each wall particle integrates a ``spacing^d`` volume.
+        Required with ``positions``.
     normals : (n, d) array, optional
         Unit normal pointing from the wall into the fluid; required for free-slip walls.
     velocity : (d,) array, m/s, optional
@@ -204,26 +208,46 @@ class WallBody(Body):
     motion : :class:`~mlsgalerkin.motion.Motion`, optional
         Prescribed rigid motion (translation and rotation about a point as functions of time,
         e.g. :class:`~mlsgalerkin.motion.Oscillation` for a piston wave maker). The wall
-        particles, their velocity, acceleration and normals follow it; the wall pressure sees
-        ``g − a_wall``.
+        particles, their velocity, acceleration and normals, and the nodes of ``surface``
+        follow it; the wall pressure sees ``g − a_wall``.
     reference_density : float
         Density given to wall particles with no fluid in reach (kg/m³).
+    surface : :class:`~mlsgalerkin.contact.surface.ContactSurface`, optional
+        A penalty contact surface of the wall (normals toward the fluid), in the reference
+        configuration of ``motion``. Used by the ``PenaltyWalls`` effect, which must then be
+        listed (:mod:`mlsgalerkin.fluid.penalty_walls`).
     """
 
     solver: ClassVar[str] = FLUID_SOLVER
     name: str
-    positions: NDArray[np.float64]
-    spacing: float
+    positions: NDArray[np.float64] | None = None
+    spacing: float | None = None
     normals: NDArray[np.float64] | None = None
     velocity: NDArray[np.float64] | None = None
     motion: Motion | None = None
     reference_density: float = 1000.0
+    surface: ContactSurface | None = None
 
     def __post_init__(self) -> None:
-        self.positions = as_coordinates(f"wall body {self.name!r} positions", self.positions)
+        if self.surface is not None and not isinstance(self.surface, ContactSurface):
+            raise ValueError(f"wall body {self.name!r}: surface must be a mlsgalerkin.contact.ContactSurface "
+                             f"(e.g. ContactSurface.tank or ContactSurface.polyline), got {type(self.surface).__name__}")
+        if self.positions is None:
+            if self.surface is None:
+                raise ValueError(f"wall body {self.name!r}: give wall particles (positions and spacing), a penalty "
+                                 "surface (surface=ContactSurface...), or both")
+            if self.normals is not None:
+                raise ValueError(f"wall body {self.name!r}: normals belong to wall particles, and this wall has none")
+            self.positions = np.zeros((0, self.surface.dim))
+        else:
+            self.positions = as_coordinates(f"wall body {self.name!r} positions", self.positions)
+            if not (isinstance(self.spacing, (int, float)) and math.isfinite(self.spacing) and self.spacing > 0):
+                raise ValueError(f"wall body {self.name!r}: spacing must be positive (the wall particle spacing, m), "
+                                 f"got {self.spacing!r}")
         n, d = self.positions.shape
-        if not self.spacing > 0:
-            raise ValueError(f"wall body {self.name!r}: spacing must be positive")
+        if self.surface is not None and self.surface.dim != d:
+            raise ValueError(f"wall body {self.name!r}: its penalty surface is {self.surface.dim}D but its particles "
+                             f"are {d}D; build both in the same space")
         if self.normals is not None:
             nrm = np.asarray(self.normals, dtype=float)
             if nrm.shape != (n, d):
@@ -246,6 +270,7 @@ class WallBody(Body):
 
     @property
     def n(self) -> int:
+        """Number of wall particles (0 for a wall that is only a penalty surface)."""
         return self.positions.shape[0]
 
     @property
@@ -255,9 +280,12 @@ class WallBody(Body):
 
 def wall_box(
     lower: ArrayLike, upper: ArrayLike, spacing: float, layers: int = 3, *,
-    open_top: bool = True, name: str = "walls", reference_density: float = 1000.0,
+    open_top: bool = True, name: str = "walls", reference_density: float = 1000.0, surface: bool = False,
 ) -> WallBody:
-    """Wall particles around the 2D box ``[lower, upper]`` (the fluid region), ``layers`` deep.
+    """Wall particles around the 2D box ``[lower, upper]`` (the fluid region), ``layers`` deep,
+    and with ``surface=True`` the box's inner penalty surface
+    (:meth:`~mlsgalerkin.contact.surface.ContactSurface.tank`, normals into the box; used by
+    ``PenaltyWalls``). ``layers=0`` with ``surface=True`` builds a wall that is only the surface.
 
     Wall particles sit at ``(k + 1/2) spacing`` outside each side (``k < layers``); along a
     side they follow the lattice of :func:`lattice` when the box is a whole number of
@@ -269,10 +297,14 @@ def wall_box(
     hi = np.asarray(upper, dtype=float)
     if lo.shape != (2,) or hi.shape != (2,):
         raise ValueError("wall_box is 2D: lower and upper must be (2,) points")
-    if layers < 1:
-        raise ValueError("wall_box: need at least one layer")
+    if layers < (0 if surface else 1):
+        raise ValueError("wall_box: need at least one layer of wall particles (or layers=0 with surface=True, a "
+                         f"wall of only a penalty surface), got layers={layers!r}")
     if not (math.isfinite(spacing) and spacing > 0) or not np.all(hi > lo) or not np.all(np.isfinite(hi - lo)):
         raise ValueError(f"wall_box: need a positive spacing and lower < upper, got {spacing!r}, {lo}, {hi}")
+    tank = ContactSurface.tank(lo, hi, open_top=open_top) if surface else None
+    if layers == 0:
+        return WallBody(name, reference_density=reference_density, surface=tank)
     size = (hi - lo) / spacing
     _check_limit(layers * (2.0 * (size[0] + 2 * layers) + 2.0 * size[1]), f"a wall box ({np.round(hi - lo, 6).tolist()} m",
                  spacing)
@@ -295,4 +327,4 @@ def wall_box(
     closest = np.clip(pts, lo, hi)
     nrm = closest - pts
     nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
-    return WallBody(name, pts, spacing, normals=nrm, reference_density=reference_density)
+    return WallBody(name, pts, spacing, normals=nrm, reference_density=reference_density, surface=tank)

@@ -12,7 +12,8 @@ advance the density between them:
 
 The time integrator (:mod:`mlsgalerkin.fluid.integrators`) is chosen once from
 ``Scene.integrator``; the mass option (:mod:`mlsgalerkin.fluid.mass`) from ``Scene.mass``.
-Walls with a prescribed motion are moved to each evaluation's time before its kinematics.
+Walls with a prescribed motion (their particles and penalty surfaces) are moved to each
+evaluation's time before its kinematics.
 Only the listed effects are ever called: each stage calls the effects that declared it.
 """
 
@@ -40,7 +41,7 @@ from mlsgalerkin.fluid.mass import (
     floor_lumped_mass,
     warn_consistent_unconverged,
 )
-from mlsgalerkin.fluid.state import CHECKPOINT_ARRAYS, FluidState
+from mlsgalerkin.fluid.state import CHECKPOINT_ARRAYS, FluidState, WallSurfaceState
 from mlsgalerkin.fluid.time_step import force_limit
 from mlsgalerkin.io.files import to_jsonable
 from mlsgalerkin.kernels import get_kernel
@@ -75,7 +76,9 @@ def build_state(fluids: list[FluidBody], walls: list[WallBody], h_factor: float)
     """Flatten fluid and wall bodies into one :class:`FluidState` (fluid first, then walls).
 
     The smoothing length is ``h = h_factor · Δx`` with each fluid body's spacing; wall particles
-    take the first fluid body's (the fluid bodies share one spacing).
+    take the first fluid body's (the fluid bodies share one spacing). A wall body that is only a
+    penalty surface adds no particles; its surface is in ``wall_surfaces`` (at rest, velocity
+    the wall's ``velocity``).
     """
     dim = (fluids or walls)[0].dim
     dx = fluids[0].spacing
@@ -99,6 +102,8 @@ def build_state(fluids: list[FluidBody], walls: list[WallBody], h_factor: float)
     mu_wall = fluids[0].phases[0].viscosity if fluids else 0.0
     wall_vol, wall_n, wall_v = [], [], []
     for w in walls:
+        if w.n == 0:
+            continue
         xs.append(w.positions)
         vs.append(np.broadcast_to(w.velocity, (w.n, dim)))
         rhos.append(np.full(w.n, w.reference_density))
@@ -113,11 +118,17 @@ def build_state(fluids: list[FluidBody], walls: list[WallBody], h_factor: float)
         bodies[w.name] = slice(start, start + w.n)
         start += w.n
     cat = lambda a, shape: np.ascontiguousarray(np.concatenate(a)) if a else np.zeros(shape)  # noqa: E731
+    for w in walls:
+        if w.n == 0:
+            bodies[w.name] = slice(start, start)
+    surfaces = {w.name: WallSurfaceState(w.surface.facets.copy(), w.surface.nodes.copy(),
+                                         np.array(np.broadcast_to(w.velocity, w.surface.nodes.shape), dtype=float))
+                for w in walls if w.surface is not None}
     return FluidState(
         x=cat(xs, (0, dim)), v=cat(vs, (0, dim)).astype(float), rho=cat(rhos, (0,)), M=cat(Ms, (0,)),
         h=cat(hs, (0,)), rho0=cat(rho0s, (0,)), mu=cat(mus, (0,)), phase=cat(phases, (0,)).astype(np.int64),
         n_fluid=n_fluid, spacing=dx, wall_volume=cat(wall_vol, (0,)), wall_normals=cat(wall_n, (0, dim)),
-        wall_velocity=cat(wall_v, (0, dim)), bodies=bodies,
+        wall_velocity=cat(wall_v, (0, dim)), bodies=bodies, wall_surfaces=surfaces,
     )
 
 
@@ -162,7 +173,7 @@ class FluidSolver(Solver):
                       if "gravity" in getattr(e, "provides", ()) and hasattr(e, "g")), None)
             if g is not None and g.shape != (fluids[0].dim,):
                 g = None  # reported by the effect's own check
-            out.extend(geometry_problems(fluids, [b for b in bodies if isinstance(b, WallBody)], g))
+            out.extend(geometry_problems(fluids, [b for b in bodies if isinstance(b, WallBody) and b.n], g))
 
         effects = list(scene.effects)
         for e in effects:
@@ -193,8 +204,12 @@ class FluidSolver(Solver):
             missing = sorted(set(e.reads) - provided)
             if missing:
                 out.append(f"{e!r} reads {missing}, which no listed effect provides")
-        if any(isinstance(b, WallBody) for b in bodies) and "wall_state" not in provided:
+        if any(isinstance(b, WallBody) and b.n for b in bodies) and "wall_state" not in provided:
             out.append("the scene has wall bodies but no wall treatment: list Walls()")
+        unused = [b.name for b in bodies if isinstance(b, WallBody) and b.surface is not None]
+        if unused and "wall_surface_contact" not in provided:
+            out.append(f"wall bodies {unused} have a penalty surface but no listed effect uses it: list PenaltyWalls() "
+                       "(or build the walls without a surface)")
         for p in scene.probes:
             missing = sorted(set(p.reads) - provided)
             if missing:
@@ -236,17 +251,21 @@ class FluidSolver(Solver):
         # walls with a prescribed motion: (rows in the state, rows among the walls, motion,
         # reference positions, reference normals)
         self._moving = []
+        self._moving_surfaces = []  # (body name, motion, reference nodes) of moving penalty surfaces
         for w in self.walls:
-            if w.motion is not None:
+            if w.motion is not None and w.surface is not None:
+                self._moving_surfaces.append((w.name, w.motion, w.surface.nodes.copy()))
+            if w.motion is not None and w.n:
                 sl = s.bodies[w.name]
                 wsl = slice(sl.start - s.n_fluid, sl.stop - s.n_fluid)
                 n0 = w.normals if w.normals is not None else np.zeros_like(w.positions)
                 self._moving.append((sl, wsl, w.motion, w.positions.copy(), np.asarray(n0, dtype=float).copy()))
         # wall penetration is measured where every wall body has normals (its surface is known)
         self._offsets = None
-        if self.walls and all(w.normals is not None for w in self.walls):
+        particle_walls = [w for w in self.walls if w.n]
+        if particle_walls and all(w.normals is not None for w in particle_walls):
             self._offsets = np.concatenate([surface_offsets(w.positions, np.asarray(w.normals, dtype=float), w.spacing)
-                                            for w in self.walls])
+                                            for w in particle_walls])
         self.penetration = {"max_depth_dx": 0.0, "max_count": 0, "time_of_max_depth_s": None, "warned": False}
         for e in self.effects:
             e.setup(s, scene)
@@ -262,13 +281,18 @@ class FluidSolver(Solver):
     # ------------------------------------------------------------------ evaluation
     def move_walls(self, t: float) -> None:
         """Put the walls with a prescribed motion where they are at time ``t`` (positions,
-        velocities, accelerations, normals); fixed walls are untouched."""
+        velocities, accelerations, normals of the wall particles; nodes and node velocities of
+        the penalty surfaces); fixed walls are untouched."""
         s = self._state
         for sl, wsl, motion, x0, n0 in self._moving:
             s.x[sl] = motion.positions(x0, t)
             s.wall_velocity[wsl] = motion.velocities(x0, t)
             s.wall_acceleration[wsl] = motion.accelerations(x0, t)
             s.wall_normals[wsl] = motion.rotate(n0, t)
+        for name, motion, x0 in self._moving_surfaces:
+            surf = s.wall_surfaces[name]
+            surf.x = np.ascontiguousarray(motion.positions(x0, t))
+            surf.v = np.ascontiguousarray(motion.velocities(x0, t))
 
     def _neighbors(self) -> None:
         s = self._state
@@ -510,6 +534,7 @@ class FluidSolver(Solver):
                          "consistent_mass_unconverged": self.consistent_mass_unconverged},
             "penetration": dict(self.penetration),
             "wall_penetration_now": [s.wall_penetrations, s.max_wall_penetration_dx],
+            "sensors": dict(s.sensors),
         }
         return arrays, meta
 
@@ -542,8 +567,10 @@ class FluidSolver(Solver):
         self.consistent_mass_unconverged = c.get("consistent_mass_unconverged", 0)
         self.penetration = dict(meta.get("penetration", self.penetration))
         s.wall_penetrations, s.max_wall_penetration_dx = meta.get("wall_penetration_now", [0, 0.0])
-        # wall velocities, accelerations and normals of the checkpoint's time (the positions
-        # are in the checkpoint)
+        s.sensors.clear()
+        s.sensors.update(meta.get("sensors", {}))
+        # wall velocities, accelerations and normals, and the penalty surfaces, of the
+        # checkpoint's time (the particle positions are in the checkpoint)
         x_walls = s.x.copy()
         self.move_walls(s.t)
         s.x[:] = x_walls

@@ -23,6 +23,10 @@ name                   shape       meaning
 ``wall_acceleration``  (n_w, d)    acceleration of the wall at each wall particle (m/s^2)
 ``wall_normals``       (n_w, d)    unit normals into the fluid (turn with a rotating wall)
 ``gravity``            (d,)        the body-force acceleration (m/s^2), ``None`` without ``Gravity``
+``wall_surfaces``      dict        each wall body's penalty surface now (:class:`WallSurfaceState`:
+                                   facets, node positions and velocities, moved with the wall)
+``sensors``            dict        scalar readings of the last evaluation that become time-series
+                                   columns (the wall force sensors of ``PenaltyWalls``)
 =====================  ==========  ========================================================
 
 Derived per evaluation and not part of a checkpoint: the neighbour and shape tables, the
@@ -39,10 +43,24 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["FluidState", "CHECKPOINT_ARRAYS"]
+__all__ = ["CHECKPOINT_ARRAYS", "FluidState", "WallSurfaceState"]
 
 #: Arrays that fully determine the continuation of a run (with ``t``, ``step``, ``dt_next``).
 CHECKPOINT_ARRAYS = ("x", "v", "rho", "M", "a", "drho", "p", "x_ref")
+
+
+@dataclass
+class WallSurfaceState:
+    """A wall body's penalty surface at the current evaluation's time.
+
+    ``facets (k, d)`` node indices (oriented as in
+    :class:`~mlsgalerkin.contact.surface.ContactSurface`), node positions ``x (m, d)`` (m) and
+    velocities ``v (m, d)`` (m/s); the fluid solver moves them with the wall's motion.
+    """
+
+    facets: NDArray[np.int64]
+    x: NDArray[np.float64]
+    v: NDArray[np.float64]
 
 
 @dataclass
@@ -88,6 +106,8 @@ class FluidState:
     wall_penetrations: int | None = None
     max_wall_penetration_dx: float | None = None
     extra: dict[str, NDArray] = field(default_factory=dict)
+    wall_surfaces: dict[str, WallSurfaceState] = field(default_factory=dict)
+    sensors: dict[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         n, d = self.x.shape
@@ -151,7 +171,7 @@ class FluidState:
     def observables(self) -> dict[str, float]:
         """The built-in time-series columns: kinetic energy, total mass, potential energy
         (with gravity), momentum, largest speed, density-ratio range, shape-function fallbacks
-        of the last evaluation."""
+        of the last evaluation, wall penetration (when measured), then the :attr:`sensors`."""
         f = self.fluid
         speed2 = np.einsum("ij,ij->i", self.v[f], self.v[f])
         ratio = self.rho[f] / self.rho0[f]
@@ -169,6 +189,7 @@ class FluidState:
         if self.wall_penetrations is not None:
             row["wall_penetrations"] = int(self.wall_penetrations)
             row["max_wall_penetration_dx"] = float(self.max_wall_penetration_dx)
+        row.update(self.sensors)
         return row
 
     def frame(self) -> tuple[NDArray[np.float64], dict[str, NDArray]]:

@@ -193,11 +193,12 @@ class Walls(Effect):
 
     def check(self, scene: "Scene") -> list[str]:
         problems = []
-        walls = scene.bodies_of(WallBody)
+        walls = [w for w in scene.bodies_of(WallBody) if w.n]
         if self.slip not in SLIP_MODES:
             problems.append(f"Walls: slip must be one of {sorted(SLIP_MODES)}, got {self.slip!r}")
         if not walls:
-            problems.append("Walls: the scene has no WallBody; add one or remove the effect")
+            problems.append("Walls: the scene has no WallBody with wall particles; add one or remove the effect (a "
+                            "wall of only a penalty surface needs PenaltyWalls, not Walls)")
         if self.slip == "free_slip" and any(w.normals is None for w in walls):
             problems.append("Walls: free_slip needs wall normals (WallBody(normals=...)); "
                             "wall_box() provides them")

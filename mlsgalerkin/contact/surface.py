@@ -1,0 +1,192 @@
+r"""The master side of a contact: a surface of facets on nodes, 2D segments or 3D triangles.
+
+A :class:`ContactSurface` holds nodes ``(m, d)`` (m) and facets ``(k, d)`` (node indices):
+two end nodes per segment in 2D, three corners per triangle in 3D. The orientation is that of
+:class:`mlsgalerkin.dynamics.Surface`: the *outward* normal (pointing away from the body, into
+the region where the slave nodes live) is
+
+- 2D: the segment direction ``b − a`` turned clockwise, ``n = (t_y, −t_x)/|t|``;
+- 3D: ``n = (b − a) × (c − a)/|…|``, the corners counter-clockwise seen from outside.
+
+So a tank's inner surface has its normals pointing into the tank, where the fluid is. Only the
+side a normal points to can be touched (the contact is one-sided; see
+:mod:`mlsgalerkin.contact.penalty`).
+
+>>> floor = ContactSurface.polyline([(1.0, 0.0), (0.0, 0.0)])      # right to left: normal up
+>>> floor.normals()
+array([[0., 1.]])
+>>> tank = ContactSurface.tank((0.0, 0.0), (1.0, 0.5))            # open top: 3 segments
+>>> (tank.normals() + 0.0).round(12).tolist()
+[[-1.0, 0.0], [0.0, 1.0], [1.0, 0.0]]
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ["ContactSurface"]
+
+
+@dataclass(frozen=True, eq=False)
+class ContactSurface:
+    """Nodes and oriented facets of a contact surface (see the module docstring).
+
+    Parameters
+    ----------
+    nodes : (m, d) float array
+        Node positions (m), ``d`` = 2 or 3; the reference configuration of a moving wall.
+    facets : (k, d) int array
+        Node indices of each facet (2D: segments ``a, b``; 3D: triangles ``a, b, c``), ordered
+        so that the outward normal points to the side that can be touched.
+
+    Raises ``ValueError`` naming the problem (shape, dimension, non-finite nodes, indices out
+    of range, a facet that repeats a node or has zero length or area).
+    """
+
+    nodes: NDArray[np.float64]
+    facets: NDArray[np.int64]
+
+    def __post_init__(self) -> None:
+        x = np.asarray(self.nodes, dtype=float)
+        if x.ndim != 2 or x.shape[1] not in (2, 3):
+            raise ValueError(f"ContactSurface: nodes must be an (m, 2) or (m, 3) array of positions, got shape {x.shape}")
+        if x.shape[0] < x.shape[1]:
+            raise ValueError(f"ContactSurface: a {x.shape[1]}D facet needs {x.shape[1]} nodes, got {x.shape[0]}")
+        if not np.all(np.isfinite(x)):
+            k = int(np.flatnonzero(~np.isfinite(x).all(axis=1))[0])
+            raise ValueError(f"ContactSurface: node {k} has a NaN or inf coordinate")
+        d = x.shape[1]
+        raw = np.asarray(self.facets)
+        if raw.ndim != 2 or raw.shape[1] != d or raw.shape[0] == 0:
+            kind = "segments (two node indices each)" if d == 2 else "triangles (three node indices each)"
+            raise ValueError(f"ContactSurface: {d}D nodes need facets of shape (k, {d}), {kind}, with k >= 1; "
+                             f"got shape {raw.shape}")
+        if raw.dtype.kind not in "iu" and not (raw.dtype.kind == "f" and np.all(raw == np.round(raw))):
+            raise ValueError(f"ContactSurface: facets must be integer node indices, got dtype {raw.dtype}")
+        f = raw.astype(np.int64)
+        if f.min() < 0 or f.max() >= x.shape[0]:
+            raise ValueError(f"ContactSurface: facet node indices must lie in [0, {x.shape[0]}), got "
+                             f"{int(f.min())} to {int(f.max())}")
+        srt = np.sort(f, axis=1)
+        repeated = np.flatnonzero(np.any(srt[:, 1:] == srt[:, :-1], axis=1))
+        if repeated.size:
+            raise ValueError(f"ContactSurface: facet {int(repeated[0])} repeats a node ({f[repeated[0]].tolist()}); "
+                             "each facet joins distinct nodes")
+        measure = _measures(x, f)
+        scale = float(np.ptp(x, axis=0).max()) or 1.0
+        small = np.flatnonzero(measure <= 1e-12 * scale ** (d - 1))
+        if small.size:
+            what = "length" if d == 2 else "area"
+            raise ValueError(f"ContactSurface: facet {int(small[0])} ({f[small[0]].tolist()}) has zero {what}: "
+                             "its nodes coincide or are collinear; remove it")
+        object.__setattr__(self, "nodes", np.ascontiguousarray(x))
+        object.__setattr__(self, "facets", np.ascontiguousarray(f))
+
+    # ------------------------------------------------------------------ sizes
+    @property
+    def dim(self) -> int:
+        """2 or 3."""
+        return int(self.nodes.shape[1])
+
+    @property
+    def n_nodes(self) -> int:
+        return int(self.nodes.shape[0])
+
+    @property
+    def n_facets(self) -> int:
+        return int(self.facets.shape[0])
+
+    def normals(self, nodes: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+        """Unit outward normals ``(k, d)`` of the facets (at ``nodes`` if given, e.g. moved)."""
+        from mlsgalerkin.contact.geometry import facet_normals_reference
+
+        return facet_normals_reference(self.nodes if nodes is None else nodes, self.facets)
+
+    def centroids(self) -> NDArray[np.float64]:
+        """Facet centroids ``(k, d)`` (m)."""
+        return self.nodes[self.facets].mean(axis=1)
+
+    def measures(self) -> NDArray[np.float64]:
+        """Facet lengths (2D, m) or areas (3D, m²), ``(k,)``."""
+        return _measures(self.nodes, self.facets)
+
+    def __repr__(self) -> str:
+        kind = "segments" if self.dim == 2 else "triangles"
+        return f"ContactSurface({self.dim}D, {self.n_nodes} nodes, {self.n_facets} {kind})"
+
+    # ------------------------------------------------------------------ orientation
+    def flipped(self) -> "ContactSurface":
+        """The same facets with the opposite orientation (normals reversed)."""
+        f = self.facets.copy()
+        f[:, [0, 1]] = f[:, [1, 0]]
+        return ContactSurface(self.nodes, f)
+
+    def oriented(self, point: ArrayLike, *, toward: bool = False) -> "ContactSurface":
+        """Each facet turned so that its normal points away from ``point`` (a point inside the
+        body: ``toward=False``) or toward it (a point in the region the slaves fill, e.g. inside
+        a tank: ``toward=True``). Decided per facet by the sign of ``(centroid − point)·n``, so
+        it is right for a body that is star-shaped about ``point`` (every convex body)."""
+        p = np.asarray(point, dtype=float)
+        if p.shape != (self.dim,):
+            raise ValueError(f"ContactSurface.oriented: point must be a ({self.dim},) position, got shape {p.shape}")
+        side = np.einsum("ij,ij->i", self.centroids() - p, self.normals())
+        flip = side > 0 if toward else side < 0
+        f = self.facets.copy()
+        f[flip, 0], f[flip, 1] = self.facets[flip, 1], self.facets[flip, 0]
+        return ContactSurface(self.nodes, f)
+
+    # ------------------------------------------------------------------ constructors
+    @classmethod
+    def polyline(cls, points: ArrayLike, closed: bool = False) -> "ContactSurface":
+        """2D segments joining consecutive ``points (m, 2)`` (and the last to the first if
+        ``closed``). Each normal is its segment's direction turned clockwise: walking along the
+        points, the touchable side is on the right. A closed polygon listed clockwise therefore
+        faces inward, counter-clockwise outward."""
+        x = np.asarray(points, dtype=float)
+        if x.ndim != 2 or x.shape[1] != 2:
+            raise ValueError(f"ContactSurface.polyline: points must be an (m, 2) array, got shape {x.shape}")
+        m = x.shape[0]
+        if m < (3 if closed else 2):
+            raise ValueError(f"ContactSurface.polyline: need at least {3 if closed else 2} points"
+                             f"{' for a closed polygon' if closed else ''}, got {m}")
+        idx = np.arange(m)
+        facets = np.column_stack([idx, np.roll(idx, -1)]) if closed else np.column_stack([idx[:-1], idx[1:]])
+        return cls(x, facets)
+
+    @classmethod
+    def tank(cls, lower: ArrayLike, upper: ArrayLike, open_top: bool = True) -> "ContactSurface":
+        """The inner surface of the box ``[lower, upper]`` (2D or 3D), normals into the box.
+
+        2D: the sides right, floor, left (and the lid unless ``open_top``), one segment each.
+        3D: two triangles per face, five faces with ``open_top`` (the top is the face at
+        ``upper`` along the last axis, the direction opposite to gravity in the shipped scenes).
+        """
+        lo = np.asarray(lower, dtype=float)
+        hi = np.asarray(upper, dtype=float)
+        if lo.shape != hi.shape or lo.ndim != 1 or lo.size not in (2, 3):
+            raise ValueError(f"ContactSurface.tank: lower and upper must be (2,) or (3,) points, got {lo.shape} "
+                             f"and {hi.shape}")
+        if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(hi > lo)):
+            raise ValueError(f"ContactSurface.tank: need finite lower < upper componentwise, got {lo} and {hi}")
+        if lo.size == 2:
+            (x0, y0), (x1, y1) = lo, hi
+            pts = [(x1, y1), (x1, y0), (x0, y0), (x0, y1)]  # clockwise: the left side faces inward
+            return cls.polyline(pts, closed=not open_top)
+        corners = np.array([[hi[0] if i & 1 else lo[0], hi[1] if i & 2 else lo[1], hi[2] if i & 4 else lo[2]]
+                            for i in range(8)])
+        # each face as a quad of corner indices; oriented inward afterwards
+        quads = [(0, 1, 3, 2), (0, 1, 5, 4), (0, 2, 6, 4), (1, 3, 7, 5), (2, 3, 7, 6)]
+        if not open_top:
+            quads.append((4, 5, 7, 6))
+        tris = [t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))]
+        return cls(corners, np.array(tris)).oriented(0.5 * (lo + hi), toward=True)
+
+
+def _measures(x: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.float64]:
+    """Segment lengths (2D) or triangle areas (3D), ``(k,)``."""
+    if x.shape[1] == 2:
+        return np.linalg.norm(x[f[:, 1]] - x[f[:, 0]], axis=1)
+    return 0.5 * np.linalg.norm(np.cross(x[f[:, 1]] - x[f[:, 0]], x[f[:, 2]] - x[f[:, 0]]), axis=1)
