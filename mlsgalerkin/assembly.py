@@ -45,6 +45,8 @@ __all__ = [
     "velocity_gradient",
     "continuity_rate",
     "velocity_gradient_divergence",
+    "scalar_gradient",
+    "scalar_gradient_reference",
     "internal_force_and_mass",
     "internal_force_reference",
     "lumped_mass_reference",
@@ -138,6 +140,24 @@ def _force_mass(indptr, indices, values, grads, sig_v, M, n_nodes, n_blocks, wan
                 if want_mass:
                     slab[blk, i, dim] += values[p] * mk
     return _sum_slabs(slab)
+
+
+@numba.njit(parallel=True, cache=True)
+def _scalar_grad(indptr, indices, grads, f, n_rows, out):
+    """``out[k, b] = Σ_j f[j] ∂_b N_j(x_k)`` for the first ``n_rows`` points."""
+    dim = grads.shape[1]
+    for k in prange(n_rows):
+        g0 = g1 = g2 = 0.0
+        for p in range(indptr[k], indptr[k + 1]):
+            fj = f[indices[p]]
+            g0 += fj * grads[p, 0]
+            g1 += fj * grads[p, 1]
+            if dim == 3:
+                g2 += fj * grads[p, 2]
+        out[k, 0] = g0
+        out[k, 1] = g1
+        if dim == 3:
+            out[k, 2] = g2
 
 
 @numba.njit(parallel=True, cache=True)
@@ -268,6 +288,23 @@ def velocity_gradient_divergence(table: ShapeTable, v: FloatArray, L: FloatArray
         div = np.empty(n)
     _grad_div(table.indptr, table.indices, table.gradients, v, L, div)
     return L, div
+
+
+def scalar_gradient(table: ShapeTable, f: FloatArray, n_rows: int | None = None) -> FloatArray:
+    """Gradient ``(n_rows, d)`` of the approximation of a nodal scalar ``f (n_nodes,)`` at the
+    first ``n_rows`` points (default all), ``∇f(x_k) = Σ_j f_j ∇N_j(x_k)``, in one gather
+    without input checks (for solvers; ``f`` C-contiguous float64)."""
+    n = table.n_points if n_rows is None else int(n_rows)
+    out = np.empty((n, table.dim))
+    _scalar_grad(table.indptr, table.indices, table.gradients, f, n, out)
+    return out
+
+
+def scalar_gradient_reference(table: ShapeTable, f: FloatArray, n_rows: int | None = None) -> FloatArray:
+    """Numpy version of :func:`scalar_gradient` (tests)."""
+    G = table.gradient_matrices()
+    n = table.n_points if n_rows is None else int(n_rows)
+    return np.stack([G[b] @ np.asarray(f, dtype=float) for b in range(table.dim)], axis=1)[:n]
 
 
 def internal_force_and_mass(table: ShapeTable, stress_volume: FloatArray, masses: FloatArray,

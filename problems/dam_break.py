@@ -9,7 +9,15 @@ dimensionless variables of the experiment,
 with the digitised data shipped as ``mlsgalerkin/data/martin_moyce_1952.csv`` (both column
 widths, 2.25 in and 1.125 in) up to ``T = 3``. The front is the largest ``x`` of the fluid particles
 plus half a spacing (the particle's own cell). The tank is ``5.5 a`` long (the front reaches
-``Z ≈ 4.2`` at ``T = 3.3``), with free-slip walls; ``c0 = 10 sqrt(2 g h)``.
+``Z ≈ 4.2`` at ``T = 3.3``), with free-slip walls; ``c0 = 10 sqrt(2 g h)``. The surge hits
+the end wall at ``t ≈ 0.27`` s and runs up it; the default end time 0.4 s covers the impact,
+and the walls (``tank_height_factor · 2a``, default 4) are tall enough for the run-up jet.
+
+Physics listed: Tait pressure (``negative_pressure``, default ``cavitate``: the thin jets and
+sheets of the run-up cannot carry tension), gravity, free-slip wall particles with the tank's
+inner surface as a penalty-contact backstop (``penalty_walls``), Monaghan viscosity ``α``,
+δ-SPH density diffusion ``δ`` and particle shifting (``shifting``); the measured choice of
+each is in ``docs/theory/stabilisation.md``.
 """
 
 from __future__ import annotations
@@ -22,8 +30,10 @@ import numpy as np
 
 from mlsgalerkin.data import reference_columns
 from mlsgalerkin.fluid import (
-    DensityFilter, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, hydrostatic_density, wall_box,
+    DensityDiffusion, FluidBody, FreeSurfaceDetection, Gravity, MonaghanViscosity, ParticleShifting, PenaltyWalls,
+    Phase, TaitPressure, Walls, hydrostatic_density, wall_box,
 )
+from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
 
@@ -37,10 +47,16 @@ INCH = 0.0254
 class Parameters:
     column_width: float = 2.25 * INCH   #: column width a; the column is a wide and 2a high (m)
     dx: float = 2.25 * INCH / 40        #: particle spacing (m)
-    t_end: float = 0.17                 #: end time; T = 3 at 0.162 s for a = 2.25 in (s)
+    t_end: float = 0.4                  #: end time; T = 3 at 0.162 s, the wall impact at 0.27 s for a = 2.25 in (s)
     tank_length_factor: float = 5.5     #: tank length / a (–)
+    tank_height_factor: float = 4.0     #: wall height / 2a; the run-up jet reaches about 3 (2a) (–)
     rho: float = 1000.0                 #: water density (kg/m³)
-    alpha: float = 0.05                 #: Monaghan artificial viscosity α (–)
+    alpha: float = 0.02                 #: Monaghan artificial viscosity α (–)
+    delta: float = 0.1                  #: density diffusion δ (δ-SPH); 0 drops it (–)
+    shifting: str = "local"             #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
+    negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
+    penalty_walls: bool = True          #: the tank's inner surface as a penalty-contact backstop (bool)
+    penalty_thickness: float = 0.25     #: contact thickness of the penalty surface / dx (–)
     h_factor: float = 1.3               #: smoothing length / particle spacing, h/dx (–)
     c0_factor: float = 10.0             #: sound speed / sqrt(2 g · 2a), c0 over the fall speed (–)
     g: float = 9.81                     #: gravitational acceleration (m/s²)
@@ -54,9 +70,22 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     c0 = p.c0_factor * math.sqrt(2.0 * p.g * height)
     water = FluidBody.block("water", (0.0, 0.0), (a, height), p.dx, [Phase("water", p.rho)])
     water.density[:] = hydrostatic_density(np.full(water.n, p.rho), height - water.positions[:, 1], p.g, c0)
-    walls = wall_box((0.0, 0.0), (p.tank_length_factor * a, 1.4 * height), p.dx, layers=3, reference_density=p.rho)
-    effects = [TaitPressure(c0, u_max=math.sqrt(2.0 * p.g * height)), Gravity((0.0, -p.g)), Walls("free_slip"),
-               MonaghanViscosity(p.alpha), DensityFilter(20)]
+    # the wall height a whole number of spacings, so the side-wall rows sit on the fluid lattice
+    wall_top = math.ceil(p.tank_height_factor * height / p.dx) * p.dx
+    walls = wall_box((0.0, 0.0), (p.tank_length_factor * a, wall_top), p.dx, layers=3, reference_density=p.rho,
+                     surface=p.penalty_walls)
+    effects = [TaitPressure(c0, u_max=math.sqrt(2.0 * p.g * height), negative_pressure=p.negative_pressure),
+               Gravity((0.0, -p.g)), Walls("free_slip")]
+    if p.alpha > 0:
+        effects.append(MonaghanViscosity(p.alpha, flow=(math.sqrt(2.0 * p.g * height), a)))
+    if p.delta > 0:
+        effects.append(DensityDiffusion(p.delta))
+    if p.shifting != "off":
+        effects.append(ParticleShifting("local" if p.shifting == "local" else None))
+    if p.negative_pressure == "free_surface":
+        effects.append(FreeSurfaceDetection(every=5))
+    if p.penalty_walls:
+        effects.append(PenaltyWalls(thickness=p.penalty_thickness * p.dx, reach=p.dx))
     n_fluid = water.n
 
     def front_x(state) -> float:
@@ -130,7 +159,14 @@ def analyse(result, p: Parameters, t_max: float = 3.0) -> dict:
 def check(p: Parameters) -> list[str]:
     """Problems with the parameters (see ``mlsgalerkin.problem``)."""
     out = require_positive(p, "column_width", "dx", "t_end", "rho", "h_factor", "c0_factor", "g", "frame_every")
-    out += require_nonnegative(p, "alpha")
+    out += require_nonnegative(p, "alpha", "delta", "penalty_thickness")
+    out += require(p.tank_height_factor >= 1.0,
+                   f"tank_height_factor = {p.tank_height_factor!r}: walls lower than the column (2a) spill it; the "
+                   "run-up after the wall impact reaches about 3 (default 4)")
+    out += require(p.shifting in ("local", "design", "off"),
+                   f"shifting = {p.shifting!r}: choose one of local, design, off")
+    out += require(p.negative_pressure in NEGATIVE_PRESSURE_MODES,
+                   f"negative_pressure = {p.negative_pressure!r}: choose one of {', '.join(NEGATIVE_PRESSURE_MODES)}")
     out += require(p.tank_length_factor > 1,
                    f"tank_length_factor = {p.tank_length_factor!r}: the tank must be longer than the column (> 1; "
                    "the surge front needs room: 5.5 reaches T = 3.3)")

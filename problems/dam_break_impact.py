@@ -36,8 +36,8 @@ import numpy as np
 
 from mlsgalerkin.data import reference_columns
 from mlsgalerkin.fluid import (
-    DensityDiffusion, FluidBody, FreeSurfaceDetection, Gravity, MonaghanViscosity, ParticleShifting, Phase,
-    TaitPressure, Walls, hydrostatic_density, wall_box,
+    DensityDiffusion, FluidBody, FreeSurfaceDetection, Gravity, MonaghanViscosity, ParticleShifting, PenaltyWalls,
+    Phase, TaitPressure, Walls, hydrostatic_density, wall_box,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.fluid.sensors import pressure_at, sensor_points
@@ -65,6 +65,8 @@ class Parameters:
     delta: float = 0.1                   #: density diffusion δ (δ-SPH); 0 drops it (–)
     shifting: str = "local"              #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
     negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
+    penalty_walls: bool = True           #: the tank's inner surface as a penalty-contact backstop behind the wall particles (bool)
+    penalty_thickness: float = 0.25      #: contact thickness of the penalty surface / dx (–)
     h_factor: float = 1.3                #: smoothing length / particle spacing, h/dx (–)
     c0_factor: float = 10.0              #: sound speed / 2 sqrt(gH), c0 over the surge speed (–)
     g: float = 9.81                      #: gravitational acceleration (m/s²)
@@ -88,7 +90,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     water.density[:] = hydrostatic_density(np.full(water.n, p.rho), H - water.positions[:, 1], p.g, c0)
     # the wall height a whole number of spacings, so the side-wall rows sit on the fluid lattice
     wall_top = math.ceil(p.tank_height_factor * H / p.dx) * p.dx
-    walls = wall_box((0.0, 0.0), (length, wall_top), p.dx, layers=3, reference_density=p.rho)
+    walls = wall_box((0.0, 0.0), (length, wall_top), p.dx, layers=3, reference_density=p.rho,
+                     surface=p.penalty_walls)
     effects = [TaitPressure(c0, u_max=u_max, negative_pressure=p.negative_pressure), Gravity((0.0, -p.g)),
                Walls("free_slip")]
     if p.alpha > 0:
@@ -99,6 +102,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
         effects.append(ParticleShifting("local" if p.shifting == "local" else None))
     if p.negative_pressure == "free_surface":
         effects.append(FreeSurfaceDetection(every=5))
+    if p.penalty_walls:
+        effects.append(PenaltyWalls(thickness=p.penalty_thickness * p.dx, reach=p.dx))
     approximation = Approximation(h_factor=p.h_factor)
     probes = []
     for k, (lo, hi) in enumerate(sensor_heights(p), start=1):
@@ -208,7 +213,7 @@ def check(p: Parameters) -> list[str]:
     """Problems with the parameters (see ``mlsgalerkin.problem``)."""
     out = require_positive(p, "height", "dx", "t_end", "rho", "h_factor", "c0_factor", "g", "probe_every",
                            "frame_every")
-    out += require_nonnegative(p, "alpha", "delta")
+    out += require_nonnegative(p, "alpha", "delta", "penalty_thickness")
     out += require(p.tank_length_factor > 2,
                    f"tank_length_factor = {p.tank_length_factor!r}: the tank must be longer than the 2H-wide column "
                    "(> 2; the reference tank is 5.366)")

@@ -9,8 +9,12 @@ as quoted by Cueto-Felgueroso et al. 2005):
 
 0.217 m/s for ``D = 0.06`` m and ``Δρ/ρ0 = 0.5`` (their simulation gave about 0.2 m/s).
 The tank length (0.34 m at their 5100 particles with ``Δx = 2`` mm, 30 × 170), the rigid
-lid on top, free-slip walls and ``c0 = 10 m/s`` (ten times the long-wave speed
-``sqrt(g D) = 0.77`` m/s) are this reproduction's choices.
+lid on top, free-slip walls and ``c0 = 10 max(2.5 v_h, sqrt(g D))`` (7.7 m/s: ten times
+the long-wave speed ``sqrt(g D) = 0.77`` m/s) are this reproduction's choices. Stabilisation:
+Monaghan ``α = 0.02`` (a numerical viscosity ``α h c0/8``, Reynolds number ``v_h D/ν`` about
+190 at the defaults, reported in ``summary.json``), δ-SPH density diffusion within each
+phase and particle shifting; ``docs/theory/stabilisation.md`` has the measurements behind
+them.
 
 Why a lid: the formula comes from laboratory currents with ``Δρ/ρ0`` of a few per cent, whose
 free surface barely moves. At ``Δρ/ρ0 = 0.5`` an open surface does move: measured with
@@ -52,11 +56,11 @@ class Parameters:
     viscosity: float = 1.0e-3      #: dynamic viscosity of both fluids; 0 drops the effect (Pa s)
     dx: float = 0.003              #: particle spacing (m)
     t_end: float = 0.8             #: end time (s)
-    c0: float = 10.0               #: sound speed; 0 picks 10 max(2.5 v_h, sqrt(g D)) (m/s)
-    alpha: float = 0.1             #: Monaghan artificial viscosity α (–)
-    delta: float = 0.0             #: density diffusion δ (δ-SPH, same-phase pairs); 0 drops it (–)
-    shifting: str = "off"          #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
-    density_filter: int = 20       #: Shepard density filter every this many steps; 0 drops it (–)
+    c0: float = 0.0                #: sound speed; 0 picks 10 max(2.5 v_h, sqrt(g D)) (m/s)
+    alpha: float = 0.02            #: Monaghan artificial viscosity α (–)
+    delta: float = 0.1             #: density diffusion δ (δ-SPH, same-phase pairs); 0 drops it (–)
+    shifting: str = "local"        #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
+    density_filter: int = 0        #: Shepard density filter every this many steps; 0 drops it (–)
     h_factor: float = 1.3          #: smoothing length / particle spacing, h/dx (–)
     g: float = 9.81                #: gravitational acceleration (m/s²)
     slip: str = "free_slip"        #: wall condition: free_slip, no_slip or fixed (choice)

@@ -206,8 +206,7 @@ def test_tank_with_diffusion_and_shifting_stays_at_rest():
     assert speed < 0.02 * math.sqrt(G * 0.3)                  # spurious speed: 2 % of the wave speed
     assert np.isfinite(s.rho[f]).all()
     reports = res.summary["fluid"]["effect_reports"]
-    assert reports["particle_shifting"]["steps"] == 2 * res.summary["steps"] or \
-        reports["particle_shifting"]["steps"] == res.summary["steps"]
+    assert reports["particle_shifting"]["steps"] == res.summary["steps"] // 4      # every 4th drift
     assert 0 < reports["particle_shifting"]["largest_shift_per_step_dx"] <= 0.1
 
 
@@ -242,3 +241,48 @@ def test_bad_stabilisation_parameters_are_reported_before_work():
     sc = tank([FreeSurfaceDetection(every=5)])
     next(e for e in sc.effects if isinstance(e, TaitPressure)).negative_pressure = "free_surface"
     Simulation(sc)                                            # accepted with the detection listed
+
+
+# ------------------------------------------------------------------- MLS pressure gradient
+def _table(x, h, nb):
+    from mlsgalerkin.approximation.build import evaluate_shape_functions
+
+    return evaluate_shape_functions(x, x, h, nb, KERNEL, 1, "mls", None)
+
+
+def test_scalar_gradient_matches_reference():
+    from mlsgalerkin.assembly import scalar_gradient, scalar_gradient_reference
+
+    x, h, M, rho, rho0, phase, nb, nf = cloud(jitter=0.2, seed=11, walls=True)
+    table = _table(x, h, nb)
+    f = np.random.default_rng(4).standard_normal(len(x))
+    np.testing.assert_allclose(scalar_gradient(table, f, nf), scalar_gradient_reference(table, f, nf), rtol=1e-12,
+                               atol=1e-9)
+
+
+def test_mls_ratio_gradient_is_exact_for_hydrostatic_two_layers_and_walls():
+    """Two layers (1000 over 1030 kg/m³) at hydrostatic rest on a wall floor whose particles
+    carry the extrapolated pressure: the ratio gradient from the MLS pressure gradient is the
+    exact one, ρ0 g/(ρ0 c²) per phase, at the surface, the interface and the floor."""
+    from mlsgalerkin.fluid.corrected_gradient import ratio_gradient_mls
+
+    c0, gamma = 20.0, 7.0
+    x, h, M, rho, rho0, phase, nb, nf = cloud(nx=10, ny=16, walls=True)
+    top = x[:nf, 1].max() + 0.5 * DX
+    half = 0.5 * top
+    y = x[:, 1]
+    p = np.where(y > half, 1000.0 * G * (top - y), 1000.0 * G * (top - half) + 1030.0 * G * (half - y))
+    rho0[:] = np.where(y > half, 1000.0, 1030.0)
+    phase[:] = (y <= half).astype(np.int64)
+    rho[:] = rho0 * (1.0 + gamma * p / (rho0 * c0 * c0)) ** (1.0 / gamma)
+    table = _table(x, h, nb)
+    grad = ratio_gradient_mls(table, rho, rho0, p, nf, c0, gamma)
+    r = rho[:nf] / rho0[:nf]
+    exact = -G / (c0 * c0 * r ** (gamma - 1.0))       # dr/dy = (dp/dy)/(dp/dr), dp/dy = −ρ0 g here
+    # MLS is linear-exact; p has a kink at the interface, so the rows within a support of it see
+    # a mix of the two slopes
+    far = np.abs(x[:nf, 1] - half) > KERNEL.support * H
+    np.testing.assert_allclose(grad[far, 0], 0.0, atol=1e-9)
+    assert np.abs(grad[~far, 0]).max() < 1e-3 * np.abs(exact).max()
+    np.testing.assert_allclose(grad[far, 1], exact[far], rtol=1e-8)
+    assert np.all(np.abs(grad[~far, 1] / exact[~far] - 1.0) < 0.04)

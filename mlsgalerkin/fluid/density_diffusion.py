@@ -46,7 +46,7 @@ import numpy as np
 from numba import prange
 from numpy.typing import NDArray
 
-from mlsgalerkin.fluid.corrected_gradient import GRADIENT_FIELD, ratio_gradient
+from mlsgalerkin.fluid.corrected_gradient import GRADIENT_FIELD, ratio_gradient, ratio_gradient_mls
 from mlsgalerkin.fluid.effect import Effect, check_positive
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.fluid.time_step import density_diffusion_limit
@@ -59,6 +59,11 @@ __all__ = ["CORRECTIONS", "DensityDiffusion", "density_diffusion_rate", "density
 
 #: The fluxes ψ (module docstring), by name.
 CORRECTIONS = {"gradient": 0, "hydrostatic": 1, "none": 2}
+#: How the ``"gradient"`` correction forms ⟨∇r⟩: ``"mls"`` (default; the MLS gradient of the
+#: pressure, :func:`~mlsgalerkin.fluid.corrected_gradient.ratio_gradient_mls`) or ``"kernel"``
+#: (Antuono et al. 2010's renormalised kernel gradient over same-phase fluid neighbours,
+#: :func:`~mlsgalerkin.fluid.corrected_gradient.ratio_gradient`, a second pass over the pairs).
+GRADIENTS = ("mls", "kernel")
 
 ETA_SQUARED = 0.01
 
@@ -132,7 +137,7 @@ def density_diffusion_rate(
 def density_diffusion_rate_reference(x, rho, rho0, M, h, phase, indptr, indices, n_fluid, kernel, delta, c0,
                                      correction="gradient", gravity=None, gamma=7.0):
     """Numpy version of :func:`density_diffusion_rate` (tests)."""
-    from mlsgalerkin.fluid.corrected_gradient import GRADIENT_FIELD, ratio_gradient_reference
+    from mlsgalerkin.fluid.corrected_gradient import ratio_gradient_reference
 
     dim = x.shape[1]
     ratio = rho / rho0
@@ -174,17 +179,19 @@ class DensityDiffusion(Effect):
     reads = ("density", "neighbors", "sound_speed")
     provides = (GRADIENT_FIELD,)
 
-    def __init__(self, delta: float = 0.1, correction: str = "gradient") -> None:
-        self.delta, self.correction = delta, correction
+    def __init__(self, delta: float = 0.1, correction: str = "gradient", gradient: str = "mls") -> None:
+        self.delta, self.correction, self.gradient = delta, correction, gradient
         self.c0 = math.nan
         self._h = math.nan
 
     def __repr__(self) -> str:
-        return f"DensityDiffusion(delta={self.delta:g}, correction={self.correction!r})"
+        return f"DensityDiffusion(delta={self.delta:g}, correction={self.correction!r}, gradient={self.gradient!r})"
 
     def check(self, scene: "Scene") -> list[str]:
         problems: list[str] = []
         check_positive("DensityDiffusion", "delta", self.delta, problems)
+        if self.gradient not in GRADIENTS:
+            problems.append(f"DensityDiffusion: gradient must be one of {list(GRADIENTS)}, got {self.gradient!r}")
         if self.correction not in CORRECTIONS:
             problems.append(f"DensityDiffusion: correction must be one of {sorted(CORRECTIONS)}, got "
                             f"{self.correction!r}")
@@ -208,9 +215,12 @@ class DensityDiffusion(Effect):
     def continuity(self, s: FluidState) -> None:
         nb = s.neighbors
         grad = None
-        if self.correction == "gradient":
+        if self.correction == "gradient" and self.gradient == "mls":
+            grad = ratio_gradient_mls(s.table, s.rho, s.rho0, s.p, s.n_fluid, self.c0, self._gamma)
+        elif self.correction == "gradient":
             grad, _ = ratio_gradient(s.x, s.rho / s.rho0, s.M / s.rho, s.h, s.phase, nb.indptr, nb.indices,
                                      s.n_fluid, self._kernel)
+        if grad is not None:
             full = s.extra.get(GRADIENT_FIELD)
             if full is None or full.shape != s.x.shape:
                 full = s.extra[GRADIENT_FIELD] = np.zeros_like(s.x)
@@ -226,5 +236,5 @@ class DensityDiffusion(Effect):
         return density_diffusion_limit(s.h[f], self.delta, self.c0)
 
     def summary(self) -> dict[str, Any]:
-        return {"delta": self.delta, "correction": self.correction, "c0": self.c0,
+        return {"delta": self.delta, "correction": self.correction, "gradient": self.gradient, "c0": self.c0,
                 "density_diffusivity_m2_per_s": 0.5 * self.delta * self._h * self.c0}
