@@ -276,7 +276,8 @@ def test_momentum_of_slave_plus_master_is_conserved_to_round_off(dim, one_numba_
         worst_p = max(worst_p, float(np.abs(p - p0).max()))
         worst_l = max(worst_l, float(np.abs(ang - l0).max()))
     assert peak > 100.0 and vs[0, -1] > 0  # it hit and bounced
-    assert worst_p < 1e-15 * 50 and worst_l < 1e-15 * 50  # |p0| ~ 0.1 kg m/s: round-off
+    # |p0| ≈ 0.1 kg m/s; measured drifts 3e-17 and 9e-17 (2D), 1e-17 and 8e-17 (3D): round-off
+    assert worst_p < 1e-15 and worst_l < 1e-15
 
 
 # ------------------------------------------------------------------ energy of a bounce
@@ -311,7 +312,7 @@ def bounce(damping: float, bounces: int, dim: int = 2, dt: float = DT) -> np.nda
 def test_a_bouncing_particle_gains_no_energy(one_numba_thread):
     """With the default damping every bounce loses energy: the ratio is close to the restitution
     of a clamped spring-dashpot, e² = 0.831 at ζ = 0.03 (solved exactly; 0.828 unclamped); at
-    ω Δt = √α = 0.32 the explicit step gives 0.82–0.87 (measured 0.834 on average)."""
+    ω Δt = √α = 0.32 the explicit step gives 0.82–0.86 (mean 0.83 over 8 bounces)."""
     e = bounce(0.03, 8)
     ratios = e[1:] / e[:-1]
     assert np.all(ratios < 0.9) and np.all(ratios > 0.8), ratios
@@ -385,7 +386,7 @@ def test_stable_step_of_a_deformable_master_bounds_the_true_frequency(rng):
     omega = math.sqrt(np.linalg.eigvalsh(minv[:, None] * K * minv[None, :]).max())
     exact = STABILITY_FACTOR * 2 * (math.sqrt(1 + 0.03**2) - 0.03) / omega
     assert res.stable_dt <= exact * (1 + 1e-12)
-    assert res.stable_dt > 0.25 * exact  # and not uselessly small (measured: 0.5–0.7 of it)
+    assert res.stable_dt > 0.25 * exact  # and not uselessly small (measured: 0.61–0.75 of it over 20 seeds)
 
 
 # ------------------------------------------------------------------ random geometry (hypothesis)
