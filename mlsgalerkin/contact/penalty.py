@@ -68,9 +68,13 @@ it is a constant, :func:`rigid_time_step` :math:`= C\cdot 2(\sqrt{1+\zeta^2}-\ze
 \Delta t_{ref}/\sqrt{d\,\alpha}` (2.2 :math:`\Delta t_{ref}` in 2D with the defaults): it binds
 only if the step grows to twice the reference step.
 
-:func:`penalty_forces` is the numba kernel (parallel over slaves; the reactions are gathered
-serially so that the totals are bit-reproducible); :func:`penalty_forces_reference` is a numpy
-version for the tests.
+:func:`penalty_forces` is the numba kernel: the broad phase, then the narrow phase over the
+slaves that have candidate facets only (parallel over them: in a fluid most particles are far
+from every wall), then the reactions, gathered serially in slave order so that the totals are
+bit-reproducible. The active contacts come back as flat per-pair arrays
+(:class:`PenaltyResult`). :func:`penalty_forces_reference` is a numpy version for the tests.
+Measured (``benchmarks/bench_contact.py``, one thread): 3–5×10⁶ candidate pairs/s in 2D,
+7–8×10⁶ in 3D, from 10⁴ to 10⁶ slaves.
 """
 
 from __future__ import annotations

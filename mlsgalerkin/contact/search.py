@@ -198,9 +198,11 @@ def candidate_pairs(points: NDArray[np.float64], nodes: NDArray[np.float64], fac
 
 def candidate_pairs_reference(points: NDArray[np.float64], nodes: NDArray[np.float64], facets: NDArray[np.int64],
                               margin: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """Numpy version of :func:`candidate_pairs`: every slave against every grown box."""
+    """Numpy version of :func:`candidate_pairs`: every slave against every grown box (the boxes
+    from numpy too, not from :func:`grown_boxes`)."""
     x = np.asarray(points, dtype=float)
-    lo, hi = grown_boxes(np.asarray(nodes, dtype=float), np.asarray(facets), float(margin))
+    corners = np.asarray(nodes, dtype=float)[np.asarray(facets)]
+    lo, hi = corners.min(axis=1) - float(margin), corners.max(axis=1) + float(margin)
     inside = np.all((x[:, None, :] >= lo[None]) & (x[:, None, :] <= hi[None]), axis=2)  # (n, k)
     indptr = np.concatenate([[0], np.cumsum(inside.sum(axis=1))]).astype(np.int64)
     return indptr, np.nonzero(inside)[1].astype(np.int64)
