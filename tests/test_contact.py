@@ -156,7 +156,7 @@ def test_no_force_when_separated(dim, where):
     res = forces(x, np.zeros(dim), 0.2, floor(dim))
     assert res.contacts == 0 and res.active_slaves == 0 and res.max_penetration == 0.0
     assert np.all(res.slave_forces == 0) and np.all(res.master_forces == 0) and np.all(res.total_force == 0)
-    assert res.stable_dt == math.inf and np.all(res.pair_facet == -1)
+    assert res.stable_dt == math.inf and res.pair_facet.size == 0 and res.pair_weights.shape == (0, dim)
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -166,10 +166,11 @@ def test_the_force_is_never_attractive(dim):
     x[-1] = G0 - 1e-5
     leaving = 10.0 * up(dim)
     res = forces(x, leaving, 0.2, floor(dim))
-    assert res.contacts == 1 and res.pair_force[0, 0] == 0.0 and np.all(res.slave_forces == 0)
+    assert res.contacts == 1 and res.pair_force[0] == 0.0 and np.all(res.slave_forces == 0)
     approaching = forces(x, -leaving, 0.2, floor(dim))
     k, c = penalty_stiffness(DEFAULT_ALPHA, 0.2, DT), 2 * 0.03 * math.sqrt(DEFAULT_ALPHA) * 0.2 / DT
-    assert approaching.pair_force[0, 0] == pytest.approx(k * 1e-5 + c * 10.0)
+    assert approaching.pair_force[0] == pytest.approx(k * 1e-5 + c * 10.0)
+    np.testing.assert_allclose(approaching.slave_forces[0], approaching.pair_force[0] * up(dim), atol=1e-9)
 
 
 # ------------------------------------------------------------------ corners
@@ -197,7 +198,8 @@ def test_outside_corner_is_rounded_and_counted_once():
     s = 0.003 / math.sqrt(2)
     res = forces([1 + s, 1 + s], [0.0, 0.0], 0.1, block)
     assert res.contacts == 1
-    np.testing.assert_allclose(res.pair_normal[0, 0], [2**-0.5, 2**-0.5], rtol=1e-12)
+    np.testing.assert_allclose(res.pair_normal[0], [2**-0.5, 2**-0.5], rtol=1e-12)
+    assert res.pair_facet[0] in (1, 2) and res.pair_gap[0] == res.gaps[0]
     assert res.gaps[0] == pytest.approx(0.003 - G0, rel=1e-12)
     # the corner node takes the whole reaction
     np.testing.assert_allclose(res.master_forces[2], -res.slave_forces[0], rtol=1e-12)
@@ -274,7 +276,8 @@ def test_momentum_of_slave_plus_master_is_conserved_to_round_off(dim, one_numba_
         worst_p = max(worst_p, float(np.abs(p - p0).max()))
         worst_l = max(worst_l, float(np.abs(ang - l0).max()))
     assert peak > 100.0 and vs[0, -1] > 0  # it hit and bounced
-    assert worst_p < 1e-15 * 50 and worst_l < 1e-15 * 50  # |p0| ~ 0.1 kg m/s: round-off
+    # |p0| ≈ 0.1 kg m/s; measured drifts 3e-17 and 9e-17 (2D), 1e-17 and 8e-17 (3D): round-off
+    assert worst_p < 1e-15 and worst_l < 1e-15
 
 
 # ------------------------------------------------------------------ energy of a bounce
@@ -309,7 +312,7 @@ def bounce(damping: float, bounces: int, dim: int = 2, dt: float = DT) -> np.nda
 def test_a_bouncing_particle_gains_no_energy(one_numba_thread):
     """With the default damping every bounce loses energy: the ratio is close to the restitution
     of a clamped spring-dashpot, e² = 0.831 at ζ = 0.03 (solved exactly; 0.828 unclamped); at
-    ω Δt = √α = 0.32 the explicit step gives 0.82–0.87 (measured 0.834 on average)."""
+    ω Δt = √α = 0.32 the explicit step gives 0.82–0.86 (mean 0.83 over 8 bounces)."""
     e = bounce(0.03, 8)
     ratios = e[1:] / e[:-1]
     assert np.all(ratios < 0.9) and np.all(ratios > 0.8), ratios
@@ -372,20 +375,18 @@ def test_stable_step_of_a_deformable_master_bounds_the_true_frequency(rng):
     res = forces(x, np.zeros((n, 2)), ms, surf, master_m=mm)
     assert res.contacts > 10
     K = np.zeros((n + surf.n_nodes, n + surf.n_nodes))
-    s_idx, c_idx = np.nonzero(res.pair_facet >= 0)
-    for s, c in zip(s_idx, c_idx):
-        j = res.pair_facet[s, c]
+    for s, j, weights in zip(res.pair_slave, res.pair_facet, res.pair_weights):
         b = np.zeros(n + surf.n_nodes)
         b[s] = 1.0
-        b[n + surf.facets[j]] = -res.pair_weights[s, c]
-        w = res.pair_weights[s, c] @ mm[surf.facets[j]]
+        b[n + surf.facets[j]] = -weights
+        w = weights @ mm[surf.facets[j]]
         k = DEFAULT_ALPHA * (ms[s] * w / (ms[s] + w)) / DT**2
         K += k * np.outer(b, b)
     minv = 1 / np.sqrt(np.concatenate([ms, mm]))
     omega = math.sqrt(np.linalg.eigvalsh(minv[:, None] * K * minv[None, :]).max())
     exact = STABILITY_FACTOR * 2 * (math.sqrt(1 + 0.03**2) - 0.03) / omega
     assert res.stable_dt <= exact * (1 + 1e-12)
-    assert res.stable_dt > 0.25 * exact  # and not uselessly small (measured: 0.5–0.7 of it)
+    assert res.stable_dt > 0.25 * exact  # and not uselessly small (measured: 0.61–0.75 of it over 20 seeds)
 
 
 # ------------------------------------------------------------------ random geometry (hypothesis)
@@ -526,13 +527,17 @@ def assert_same_result(got, ref, dim: int, surf: ContactSurface) -> None:
     assert (got.contacts, got.active_slaves) == (ref.contacts, ref.active_slaves)
     assert got.max_penetration == pytest.approx(ref.max_penetration, abs=1e-12)
     assert got.stable_dt == pytest.approx(ref.stable_dt, rel=1e-10)
-    active = ref.pair_facet >= 0
-    np.testing.assert_array_equal(got.pair_facet >= 0, active)
+    np.testing.assert_array_equal(got.pair_slave, ref.pair_slave)
     if dim == 2:  # in 3D an edge shared by two triangles is a tie that round-off may break either way
         np.testing.assert_array_equal(got.pair_facet, ref.pair_facet)
-    np.testing.assert_allclose(got.pair_gap[active], ref.pair_gap[active], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(got.pair_force[active], ref.pair_force[active], rtol=0, atol=1e-11 * scale)
-    np.testing.assert_allclose(got.pair_normal[active], ref.pair_normal[active], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(got.pair_gap, ref.pair_gap, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got.pair_force, ref.pair_force, rtol=0, atol=1e-11 * scale)
+    np.testing.assert_allclose(got.pair_normal, ref.pair_normal, rtol=0, atol=1e-9)
+    assert got.pair_weights.shape == ref.pair_weights.shape == (got.contacts, dim)
+    for pairs in (got, ref):  # the slave forces are the sums of their contacts
+        summed = np.zeros_like(pairs.slave_forces)
+        np.add.at(summed, pairs.pair_slave, pairs.pair_force[:, None] * pairs.pair_normal)
+        np.testing.assert_allclose(summed, pairs.slave_forces, rtol=0, atol=1e-12 * scale)
     _, xc_got, fc_got = got.contact_points(surf.nodes, surf.facets)
     _, xc_ref, fc_ref = ref.contact_points(surf.nodes, surf.facets)
     np.testing.assert_allclose(xc_got, xc_ref, rtol=0, atol=1e-12)
@@ -566,7 +571,7 @@ def test_penalty_kernel_matches_the_reference_in_a_crowded_tank(dim, rng):
     args = (x, rng.normal(0, 1, (500, dim)), 0.1, surf.nodes, None, None, surf.facets)
     kw = dict(dt_ref=1e-4, thickness=0.02, reach=0.04)
     got, ref = penalty_forces(*args, **kw), penalty_forces_reference(*args, **kw)
-    assert np.sum(got.pair_facet >= 0, axis=1).max() == dim  # some slaves touch d walls
+    assert np.bincount(got.pair_slave).max() == dim  # some slaves touch d walls
     assert_same_result(got, ref, dim, surf)
     given_pairs = candidate_pairs(x, surf.nodes, surf.facets, search_margin(0.02, 0.04))
     again = penalty_forces(*args, **kw, candidates=given_pairs)

@@ -12,8 +12,8 @@ uses ``margin = max(g0, reach − g0)``: the farthest a slave in front of the fa
 the contact thickness) or behind it (``reach − g0``) can be and still touch it.
 
 :func:`candidate_pairs` bins the grown boxes into a uniform cell grid (cell edge ``≥ 2
-margin`` and about the typical facet size, at most ``max(8 k, 4096)`` cells for ``k``
-facets), then tests each slave against the facets of its cell only: ``O(n + k)`` work for
+margin``: the median grown-box size, over every ``⌈k/1024⌉``-th facet; at most ``max(8 k,
+4096)`` cells for ``k`` facets), then tests each slave against the facets of its cell only: ``O(n + k)`` work for
 ``n`` slaves. The result is in CSR form, ``indices[indptr[s]:indptr[s + 1]]`` the candidate
 facets of slave ``s`` in increasing order. :func:`candidate_pairs_reference` tests every
 slave against every box (numpy).
@@ -33,13 +33,46 @@ __all__ = ["candidate_pairs", "candidate_pairs_reference", "grown_boxes"]
 #: Upper bound on the cell count relative to the facet count (and an absolute floor).
 CELLS_PER_FACET = 8
 MIN_CELL_CAP = 4096
+#: The cell edge is the median box size of at most about this many facets (every k-th).
+MEDIAN_SAMPLE = 1024
+
+
+@numba.njit(cache=True)
+def _boxes(nodes, facets, margin, lo, hi):
+    for j in range(facets.shape[0]):
+        for a in range(nodes.shape[1]):
+            v = nodes[facets[j, 0], a]
+            lo[j, a] = v
+            hi[j, a] = v
+            for c in range(1, facets.shape[1]):
+                v = nodes[facets[j, c], a]
+                lo[j, a] = min(lo[j, a], v)
+                hi[j, a] = max(hi[j, a], v)
+            lo[j, a] -= margin
+            hi[j, a] += margin
+
+
+@numba.njit(cache=True)
+def _corners(lo, hi):
+    """Lower corner of all boxes ``lo`` and upper corner of all ``hi`` (a numpy ``min(axis=0)``
+    over an ``(k, d)`` array is strided and several times slower)."""
+    first = lo[0].copy()
+    last = hi[0].copy()
+    for j in range(1, lo.shape[0]):
+        for a in range(lo.shape[1]):
+            first[a] = min(first[a], lo[j, a])
+            last[a] = max(last[a], hi[j, a])
+    return first, last
 
 
 def grown_boxes(nodes: NDArray[np.float64], facets: NDArray[np.int64], margin: float
                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Lower and upper corners ``(k, d)`` of each facet's bounding box grown by ``margin`` (m)."""
-    corners = nodes[facets]
-    return corners.min(axis=1) - margin, corners.max(axis=1) + margin
+    x = np.ascontiguousarray(nodes, dtype=np.float64)
+    f = np.ascontiguousarray(facets, dtype=np.int64)
+    lo, hi = np.empty((f.shape[0], x.shape[1])), np.empty((f.shape[0], x.shape[1]))
+    _boxes(x, f, float(margin), lo, hi)
+    return lo, hi
 
 
 @numba.njit(cache=True)
@@ -139,15 +172,15 @@ def candidate_pairs(points: NDArray[np.float64], nodes: NDArray[np.float64], fac
     x = np.ascontiguousarray(points, dtype=np.float64)
     n, dim = x.shape
     f = np.ascontiguousarray(facets, dtype=np.int64)
-    lo, hi = grown_boxes(np.asarray(nodes, dtype=np.float64), f, float(margin))
-    lo, hi = np.ascontiguousarray(lo), np.ascontiguousarray(hi)
+    lo, hi = grown_boxes(nodes, f, float(margin))
     k = f.shape[0]
     indptr = np.zeros(n + 1, dtype=np.int64)
     if n == 0 or k == 0:
         return indptr, np.zeros(0, dtype=np.int64)
-    origin = lo.min(axis=0)
-    extent = hi.max(axis=0) - origin
-    size = float(np.median((hi - lo).max(axis=1)))  # grown boxes: >= 2 margin
+    origin, top = _corners(lo, hi)
+    extent = top - origin
+    every = max(1, k // MEDIAN_SAMPLE)  # the median box size of a sample of the facets
+    size = float(np.median((hi[::every] - lo[::every]).max(axis=1)))  # grown boxes: >= 2 margin
     cell = max(size, 1e-12 * max(float(extent.max()), 1.0))
     cap = max(CELLS_PER_FACET * k, MIN_CELL_CAP)
     dims = np.maximum(np.floor(extent / cell).astype(np.int64) + 1, 1)
@@ -165,9 +198,11 @@ def candidate_pairs(points: NDArray[np.float64], nodes: NDArray[np.float64], fac
 
 def candidate_pairs_reference(points: NDArray[np.float64], nodes: NDArray[np.float64], facets: NDArray[np.int64],
                               margin: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """Numpy version of :func:`candidate_pairs`: every slave against every grown box."""
+    """Numpy version of :func:`candidate_pairs`: every slave against every grown box (the boxes
+    from numpy too, not from :func:`grown_boxes`)."""
     x = np.asarray(points, dtype=float)
-    lo, hi = grown_boxes(np.asarray(nodes, dtype=float), np.asarray(facets), float(margin))
+    corners = np.asarray(nodes, dtype=float)[np.asarray(facets)]
+    lo, hi = corners.min(axis=1) - float(margin), corners.max(axis=1) + float(margin)
     inside = np.all((x[:, None, :] >= lo[None]) & (x[:, None, :] <= hi[None]), axis=2)  # (n, k)
     indptr = np.concatenate([[0], np.cumsum(inside.sum(axis=1))]).astype(np.int64)
     return indptr, np.nonzero(inside)[1].astype(np.int64)
