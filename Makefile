@@ -23,6 +23,7 @@ verify: $(STAMP)
 	$(PY) verification/kernel_study.py --out verification/results/kernel_study
 	OPENBLAS_NUM_THREADS=1 $(PY) verification/galerkin_convergence.py --out verification/results/galerkin_convergence
 	$(PY) verification/fluid_validation.py --out verification/results/fluid_validation
+	$(PY) verification/fluid_core.py --section all --out verification/results/fluid_core
 
 bench: $(STAMP)
 	$(PY) benchmarks/run_all.py

@@ -1,9 +1,12 @@
 """Fluid-solver throughput: particle-steps per second of one time step on the 2D dam break.
 
-The scene is :func:`mlsgalerkin.problems.dam_break.make_scene` (Martin & Moyce column, ``a``
-wide and ``2a`` high, in a ``5.5 a`` tank with three layers of wall particles; linear MLS,
-cubic spline, ``h = 1.3 dx``, KDK integrator, Tait pressure, free-slip walls, Monaghan
-viscosity, density filter every 20 steps). The resolution ``a/dx`` is chosen so that fluid
+The scene is :func:`mlsgalerkin.problems.dam_break.make_scene` as shipped (Martin & Moyce
+column, ``a`` wide and ``2a`` high, in a ``5.5 a`` tank with three layers of wall particles
+and its penalty surface; linear MLS, cubic spline, ``h = 1.3 dx``, KDK integrator, Tait
+pressure with the tension floor, free-slip walls, Monaghan viscosity, density diffusion,
+particle shifting every 4 steps, penalty walls; before the fluid-core work it listed a
+density filter every 20 steps instead of the last three). Whole runs, through the wall
+impact, are timed by ``bench_fluid_run.py``. The resolution ``a/dx`` is chosen so that fluid
 plus wall particles come closest to the target sizes (default about 1e4, 4e4 and 1.6e5:
 ``a/dx`` = 62, 134, 274; even values only, see :func:`ratio_for`); the exact counts are
 reported.
@@ -13,7 +16,7 @@ Per size and thread count: a fresh :class:`~mlsgalerkin.simulation.Simulation`,
 snapshot (``sim.snapshot()``). A *block* is ``restore(*snapshot)`` (not timed) followed by
 ``sim.step(sim.time_step())`` a fixed number of times (timed): every repetition performs
 exactly the same steps, neighbour rebuilds included. The time is the best of several blocks
-(default 3). Blocks are a multiple of 20 steps, so each holds the same number of density-filter
+(default 3). Blocks are a multiple of 20 steps, so each holds the same number of shifting
 passes. Throughput = ``n_total × steps / best block time``.
 
 Stage split: the fluid solver's ``timer.seconds`` (cleared before each block) of the best block, grouped as

@@ -66,12 +66,23 @@ ENTRIES: tuple[Entry, ...] = (
           "high) at T = t √(2g/a) ≈ 3, the end of their measurements: the surge runs along the "
           "floor, fastest at its tip (about 1.5 m/s), about 0.23 m (Z = z/a ≈ 4) from the left "
           "wall, while the water at the wall has fallen to less than half the column's height."),
+    Entry("dam_break_impact", {"dx": 0.03, "t_end": 1.385, "frame_every": 1.385}, "pressure",
+          "Dam break with wall impact",
+          "The 0.6 m column of Zhou et al. (1999) at T = t √(g/H) = 5.6, after the surge has hit the "
+          "end wall and run up it (H/Δx = 20): the run-up falls back as a plunging jet that is about "
+          "to re-enter the flow and close an air cavity; the pressure at the foot of the wall is "
+          "what the sensors P1–P4 read."),
     Entry("gravity_current", {"dx": 0.003, "t_end": 0.5, "frame_every": 0.5}, "density",
           "Gravity current (lock exchange)",
           "Lock exchange of Cueto-Felgueroso et al. (2005) half a second after the lock (at "
           "x = 0.17 m) was lifted: the heavy fluid (1500 kg/m³) runs under the light one "
           "(1000 kg/m³) towards the left wall, with the raised head at its front, and the light "
           "fluid runs over it to the right under the lid."),
+    Entry("stratified_rest", {"t_end": 1.0, "frame_every": 1.0, "alpha": 0.1}, "speed",
+          "Two-layer tank at rest",
+          "Fresh water (1000 kg/m³) over salt water (1030 kg/m³), 6 cm deep, one second after a "
+          "hydrostatic start (α = 0.1): the speeds that remain are the solver's noise, millimetres "
+          "per second against the internal-wave speed √(g′D) = 13 cm/s."),
     Entry("drop_impact", {"t_end": 0.03}, "speed",
           "Drop impact",
           "A drop 20 mm across hitting still liquid at 2 m/s (Cueto-Felgueroso et al. 2005; "

@@ -200,6 +200,14 @@ def analyse(result, p: Parameters, window: tuple[float, float] = (2.0, 7.0)) -> 
         out["P1_reference_peak"], out["P1_reference_peak_T"] = float(r[j, 1]), float(r[j, 0])
         out["P1_peak_error"] = out["P1_peak"] / out["P1_reference_peak"] - 1.0
         out["P1_peak_time_error_T"] = out["P1_peak_T"] - out["P1_reference_peak_T"]
+    # mechanical energy: the share of the releasable potential energy (column → the same water at
+    # rest over the whole tank) that has gone by the end (dissipated, or stored by compression)
+    if "kinetic_energy" in ts and "potential_energy" in ts:
+        E = np.asarray(ts["kinetic_energy"]) + np.asarray(ts["potential_energy"])
+        mass = float(np.asarray(ts["total_mass"])[0])
+        rest_depth = 2.0 * p.height**2 / (p.tank_length_factor * p.height)
+        E_rest = mass * p.g * 0.5 * rest_depth
+        out["energy_lost_fraction"] = float((E[0] - E[-1]) / (E[0] - E_rest))
     rms = [out.get(f"rms_deviation_P{k}", math.nan) for k in range(1, 5)]
     out["headline"] = (
         f"H/dx = {p.height / p.dx:.0f}: P1 peak {out.get('P1_peak', math.nan):.2f} at T = "

@@ -15,6 +15,13 @@ speed over ``sqrt(g' D)``; ``pressure_rms_ratio`` — the RMS deviation of the p
 from the exact profile over ``Δρ g D`` (under a lid, after removing the mean deviation: the
 lid's pressure level is free). ``analyse`` reports both over the last ``settle`` seconds and
 their maxima.
+
+Measured (``verification/results/fluid_core/rest.md``): the solver does not hold this state
+quietly enough. Over 5 s at 20 rows the largest speed grows to tens of per cent of
+``sqrt(g' D)`` — with α = 0.02 and with α = 0.1, with or without density diffusion and
+shifting, with a free surface or a lid — the slow growth of the velocity modes that nodal
+integration does not see (``docs/theory/stabilisation.md`` §4). The default α = 0.1 is the
+quietest measured.
 """
 
 from __future__ import annotations
@@ -45,7 +52,8 @@ class Parameters:
     dx: float = 0.003              #: particle spacing (m)
     t_end: float = 5.0             #: end time (s)
     c0: float = 0.0                #: sound speed; 0 picks 10 sqrt(g D) (m/s)
-    alpha: float = 0.02            #: Monaghan artificial viscosity α (–)
+    alpha: float = 0.1             #: Monaghan artificial viscosity α (–)
+    residual_viscosity: bool = False  #: Monaghan on the deviation from the linear velocity field only (bool)
     delta: float = 0.1             #: density diffusion δ (δ-SPH, same-phase pairs); 0 drops it (–)
     shifting: str = "local"        #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
     density_filter: int = 0        #: Shepard density filter every this many steps; 0 drops it (–)
@@ -86,7 +94,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     wave = math.sqrt(g_reduced * p.depth)
     effects = [TaitPressure(c0, u_max=max(wave, 1e-9)), Gravity((0.0, -p.g)), Walls("free_slip")]
     if p.alpha > 0:
-        effects.append(MonaghanViscosity(p.alpha, flow=(0.5 * wave, p.depth)))
+        effects.append(MonaghanViscosity(p.alpha, residual=p.residual_viscosity, flow=(0.5 * wave, p.depth)))
     if p.density_filter > 0:
         effects.append(DensityFilter(p.density_filter))
     if p.delta > 0:

@@ -149,7 +149,7 @@ def _prepare(
 
 @numba.njit(parallel=True, cache=True)
 def _monaghan_kernel(
-    x, v, rho, c, m, h, indptr, indices, kid, support, norm_d, alpha, beta, active
+    x, v, rho, c, m, h, indptr, indices, kid, support, norm_d, alpha, beta, active, L, use_l
 ):
     n, dim = x.shape
     force = np.zeros((n, dim))
@@ -186,6 +186,12 @@ def _monaghan_kernel(
             q = r / hij
             if q >= support:
                 continue
+            if use_l:  # remove the linear part: w_ij = v_ij − ½(L_i + L_j) x_ij, vx = w_ij · x_ij
+                for a in range(dim):
+                    da = dx if a == 0 else (dy if a == 1 else dz)
+                    for b in range(dim):
+                        db = dx if b == 0 else (dy if b == 1 else dz)
+                        vx -= 0.5 * (L[i, a, b] + L[j, a, b]) * db * da
             phi = hij * vx / (r2 + ETA_SQUARED * hij * hij)
             if abs(phi) > phimax:
                 phimax = abs(phi)
@@ -221,6 +227,7 @@ def monaghan_viscosity_force(
     alpha: float = 0.05,
     beta: float = 0.0,
     active: ArrayLike | None = None,
+    gradient: ArrayLike | None = None,
 ) -> tuple[FloatArray, float]:
     """Artificial-viscosity force ``f_i = −Σ_j M_i M_j Π_ij ∇_i W_ij`` and ``max |φ_ij|``.
 
@@ -237,6 +244,9 @@ def monaghan_viscosity_force(
         shocks: α ≈ β ≈ 1).
     active : optional (n,) bool; only these particles receive force (others, e.g. fixed wall
         particles, still act as partners ``j``); inactive rows are zero.
+    gradient : optional (n, d, d) velocity gradient ``L`` (1/s): the pair velocity difference is
+        replaced by its deviation from the linear field, ``w_ij = v_ij − ½(L_i + L_j) x_ij``
+        (:class:`MonaghanViscosity` with ``residual=True``).
 
     Returns
     -------
@@ -249,9 +259,11 @@ def monaghan_viscosity_force(
         positions, velocity, density, sound_speed, masses, h, neighbors, kernel, alpha, beta, active
     )
     dim = x.shape[1]
+    use_l = gradient is not None
+    L = np.ascontiguousarray(gradient, dtype=float) if use_l else np.zeros((1, dim, dim))
     force, row_phi = _monaghan_kernel(
         x, v, rho, c, m, hh, indptr, indices, k.kernel_id, float(k.support),
-        float(k.normalisation(dim)), alpha, beta, act,
+        float(k.normalisation(dim)), alpha, beta, act, L, use_l,
     )
     return force, float(row_phi.max()) if row_phi.size else 0.0
 
@@ -268,6 +280,7 @@ def monaghan_viscosity_force_reference(
     alpha: float = 0.05,
     beta: float = 0.0,
     active: ArrayLike | None = None,
+    gradient: ArrayLike | None = None,
 ) -> tuple[FloatArray, float]:
     """numpy reference of :func:`monaghan_viscosity_force` (vectorised over pairs)."""
     x, v, rho, c, m, hh, indptr, indices, k, alpha, beta, act = _prepare(
@@ -278,6 +291,9 @@ def monaghan_viscosity_force_reference(
     cols = indices.astype(np.int64)
     dx = x[rows] - x[cols]
     dv = v[rows] - v[cols]
+    if gradient is not None:
+        Lg = np.asarray(gradient, dtype=float)
+        dv = dv - 0.5 * np.einsum("pab,pb->pa", Lg[rows] + Lg[cols], dx)
     r2 = np.einsum("pd,pd->p", dx, dx)
     vx = np.einsum("pd,pd->p", dv, dx)
     hij = 0.5 * (hh[rows] + hh[cols])
@@ -333,16 +349,18 @@ class MonaghanViscosity(Effect):
     stages = ("force",)
     reads = ("velocity", "density", "sound_speed", "neighbors")
 
-    def __init__(self, alpha: float = 0.05, beta: float = 0.0, *, flow: tuple[float, float] | None = None,
-                 min_reynolds: float = REYNOLDS_THRESHOLD) -> None:
+    def __init__(self, alpha: float = 0.05, beta: float = 0.0, *, residual: bool = False,
+                 flow: tuple[float, float] | None = None, min_reynolds: float = REYNOLDS_THRESHOLD) -> None:
         self.alpha, self.beta = alpha, beta
+        self.residual = residual
         self.flow, self.min_reynolds = flow, min_reynolds
         self.max_phi = 0.0
         self.nu = math.nan
         self.reynolds = math.nan
 
     def __repr__(self) -> str:
-        extra = "" if self.flow is None else f", flow={tuple(self.flow)!r}"
+        extra = ", residual=True" if self.residual else ""
+        extra += "" if self.flow is None else f", flow={tuple(self.flow)!r}"
         return f"MonaghanViscosity(alpha={self.alpha:g}, beta={self.beta:g}{extra})"
 
     def check(self, scene: "Scene") -> list[str]:
@@ -360,11 +378,12 @@ class MonaghanViscosity(Effect):
         self._kernel = get_kernel(scene.approximation.kernel)
         self._active = np.zeros(state.n, dtype=bool)
         self._active[state.fluid] = True
+        self._no_gradient = np.zeros((1, state.dim, state.dim))
         pressure = next((e for e in scene.effects if getattr(e, "role", "") == "pressure" and hasattr(e, "c0")), None)
         c0 = float(pressure.c0) if pressure is not None else math.nan
         h = float(np.mean(state.h[state.fluid])) if state.n_fluid else math.nan
         self.nu = numerical_viscosity(self.alpha, h, c0, state.dim)
-        if self.flow is not None:
+        if self.flow is not None and not self.residual:
             U, L = (float(v) for v in self.flow)
             self.reynolds = U * L / self.nu if self.nu > 0 else math.inf
             if self.reynolds < self.min_reynolds:
@@ -377,7 +396,8 @@ class MonaghanViscosity(Effect):
                     NumericalViscosityWarning, stacklevel=2)
 
     def summary(self) -> dict[str, Any]:
-        out: dict[str, Any] = {"alpha": self.alpha, "beta": self.beta, "numerical_viscosity_m2_per_s": self.nu}
+        out: dict[str, Any] = {"alpha": self.alpha, "beta": self.beta, "residual": self.residual,
+                               "numerical_viscosity_m2_per_s": self.nu}
         if self.flow is not None:
             out["flow_speed_m_per_s"], out["flow_length_m"] = (float(v) for v in self.flow)
             out["numerical_reynolds_number"] = self.reynolds
@@ -387,9 +407,11 @@ class MonaghanViscosity(Effect):
         # the solver's own arrays are valid by construction: call the compiled kernel directly
         # (monaghan_viscosity_force re-validates every input, ~2.6 ms per call at 1.6e5 particles)
         k = self._kernel
+        L = s.L if self.residual else self._no_gradient
         f, row_phi = _monaghan_kernel(
             s.x, s.v, s.rho, s.c, s.M, s.h, s.neighbors.indptr, s.neighbors.indices, k.kernel_id,
             float(k.support), float(k.normalisation(s.dim)), float(self.alpha), float(self.beta), self._active,
+            L, self.residual,
         )
         self.max_phi = float(row_phi.max()) if row_phi.size else 0.0
         s.force[s.fluid] += f[s.fluid]
