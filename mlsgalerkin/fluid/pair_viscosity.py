@@ -154,9 +154,11 @@ def _monaghan_kernel(
     n, dim = x.shape
     force = np.zeros((n, dim))
     row_max_phi = np.zeros(n)
-    for i in prange(n):
-        if not active[i]:
-            continue
+    # loop over the active rows only: with fluid first and walls last, a prange over all rows
+    # gave one thread the fluid and the other mostly idle wall rows (no speed-up on 2 threads)
+    rows = np.nonzero(active)[0]
+    for k in prange(rows.shape[0]):
+        i = rows[k]
         fx = 0.0
         fy = 0.0
         fz = 0.0
