@@ -231,7 +231,7 @@ def snapshots(run_dir: Path, png: Path, times_T=(2.4, 4.0, 5.0, 5.6, 6.2, 7.0), 
         sc = ax.scatter(pts[~wall, 0], pts[~wall, 1], s=0.3, c=p[~wall], cmap="viridis", vmin=0, vmax=1.5)
         ax.set_aspect("equal")
         ax.set_xlim(-0.1, 3.35)
-        ax.set_ylim(-0.1, 1.4)
+        ax.set_ylim(-0.1, 1.9)
         ax.set_title(f"T = {times[i] * math.sqrt(9.81 / H):.2f} (t = {times[i]:.3f} s)", fontsize=9)
         ax.set_ylabel("y (m)")
         fig.colorbar(sc, ax=ax, label="p/(rho g H)")

@@ -50,8 +50,9 @@ unchanged, so mass is conserved exactly; momentum changes by ``Σ M L δr`` (sec
 **Every few steps.** The shift is applied at every ``every``-th drift (default 4), with
 ``Δt`` the time since the last one: the same displacement per unit time, at a quarter of the
 cost (a pass over the neighbours per application, about the cost of the Monaghan viscosity).
-Measured on the dam break with impact (``H/dx = 40``, to ``T = 7``): [see
-``docs/theory/stabilisation.md``].
+Measured on the dam break with impact (``H/dx = 40``, to ``T = 7``, one core shared with
+another job): every drift, P1 peak 2.64 and RMS deviation of P1 0.37, shifting 17 s of an
+87 s run; every 4th drift, 2.59 and 0.29, shifting 7 s of 78 s.
 
 The shift is part of the drift, ``x ← x + Δt v + δr``: no extra neighbour search or shape
 function evaluation, and the kinematics at ``xⁿ⁺¹`` see the shifted positions. It is computed
