@@ -23,8 +23,10 @@ Under the lid the pressure level is free (the fluid is closed in): the tank star
 without it, the case ``D = 0.06`` m, ``Δρ/ρ0 = 0.1`` diverged at 1.26 s (a particle under the
 lid at the right wall reached ``ρ/ρ0 = 0.47``), with it the run completes (+3.1 %). The level
 does not stay: at ``Δρ/ρ0 = 0.03``, ``D = 0.06`` m the mean pressure of the top row falls from
-620 Pa to about 0 between 0.3 and 0.8 s (the fluid gains the 1 % of volume its compression
-held; not yet understood). Pressure noise under the lid, the spread (max − min) of the top
+620 Pa to about 0 between 0.3 and 0.8 s: the fluid expands into the gap between it and
+the wall particles (top gap 0.44 → 0.27 Δx, side gaps 0.5–0.74 → 0.34–0.41 Δx, the fluid
+volume ``Σ M/ρ`` up by 1 %), which the wall particles' pressure does not resist and the
+penalty surface, at Δx/4, does not yet reach. Pressure noise under the lid, the spread (max − min) of the top
 row's pressure after 0.2 s at ``Δρ/ρ0 = 0.03`` (``Δρ g D = 17.7`` Pa): median 98 Pa, largest
 323 Pa at the defaults; 200 / 1170 Pa without the lid pressure; 74 / 127 Pa with α = 0.1;
 43 / 112 Pa with the former defaults (α = 0.1, Shepard filter, free slip). Lower artificial
