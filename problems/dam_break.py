@@ -30,8 +30,8 @@ import numpy as np
 
 from mlsgalerkin.data import reference_columns
 from mlsgalerkin.fluid import (
-    DensityDiffusion, FluidBody, FreeSurfaceDetection, Gravity, MonaghanViscosity, ParticleShifting, PenaltyWalls,
-    Phase, TaitPressure, Walls, hydrostatic_density, wall_box,
+    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, hydrostatic_density,
+    stabilisation, wall_box,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
@@ -78,14 +78,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                Gravity((0.0, -p.g)), Walls("free_slip")]
     if p.alpha > 0:
         effects.append(MonaghanViscosity(p.alpha, flow=(math.sqrt(2.0 * p.g * height), a)))
-    if p.delta > 0:
-        effects.append(DensityDiffusion(p.delta))
-    if p.shifting != "off":
-        effects.append(ParticleShifting("local" if p.shifting == "local" else None))
-    if p.negative_pressure == "free_surface":
-        effects.append(FreeSurfaceDetection(every=5))
-    if p.penalty_walls:
-        effects.append(PenaltyWalls(thickness=p.penalty_thickness * p.dx, reach=p.dx))
+    effects += stabilisation(delta=p.delta, shifting=p.shifting, negative_pressure=p.negative_pressure,
+                             penalty_thickness=p.penalty_thickness * p.dx if p.penalty_walls else None, spacing=p.dx)
     n_fluid = water.n
 
     def front_x(state) -> float:
@@ -163,8 +157,8 @@ def check(p: Parameters) -> list[str]:
     out += require(p.tank_height_factor >= 1.0,
                    f"tank_height_factor = {p.tank_height_factor!r}: walls lower than the column (2a) spill it; the "
                    "run-up after the wall impact reaches about 3 (default 4)")
-    out += require(p.shifting in ("local", "design", "off"),
-                   f"shifting = {p.shifting!r}: choose one of local, design, off")
+    out += require(p.shifting in SHIFTING_MODES,
+                   f"shifting = {p.shifting!r}: choose one of {', '.join(SHIFTING_MODES)}")
     out += require(p.negative_pressure in NEGATIVE_PRESSURE_MODES,
                    f"negative_pressure = {p.negative_pressure!r}: choose one of {', '.join(NEGATIVE_PRESSURE_MODES)}")
     out += require(p.tank_length_factor > 1,

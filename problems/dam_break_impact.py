@@ -36,8 +36,8 @@ import numpy as np
 
 from mlsgalerkin.data import reference_columns
 from mlsgalerkin.fluid import (
-    DensityDiffusion, FluidBody, FreeSurfaceDetection, Gravity, MonaghanViscosity, ParticleShifting, PenaltyWalls,
-    Phase, TaitPressure, Walls, hydrostatic_density, wall_box,
+    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, hydrostatic_density,
+    stabilisation, wall_box,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.fluid.sensors import pressure_at, sensor_points
@@ -50,7 +50,6 @@ SMOKE = {"dx": 0.05, "t_end": 0.02}
 #: Sensor centres above the floor for H = 0.6 m (m), and the sensors' height (m).
 SENSOR_CENTRES = (0.006, 0.030, 0.060, 0.160)
 SENSOR_SIZE = 0.0084
-SHIFTING_MODES = ("local", "design", "off")
 
 
 @dataclass(frozen=True)
@@ -96,14 +95,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                Walls("free_slip")]
     if p.alpha > 0:
         effects.append(MonaghanViscosity(p.alpha))
-    if p.delta > 0:
-        effects.append(DensityDiffusion(p.delta))
-    if p.shifting != "off":
-        effects.append(ParticleShifting("local" if p.shifting == "local" else None))
-    if p.negative_pressure == "free_surface":
-        effects.append(FreeSurfaceDetection(every=5))
-    if p.penalty_walls:
-        effects.append(PenaltyWalls(thickness=p.penalty_thickness * p.dx, reach=p.dx))
+    effects += stabilisation(delta=p.delta, shifting=p.shifting, negative_pressure=p.negative_pressure,
+                             penalty_thickness=p.penalty_thickness * p.dx if p.penalty_walls else None, spacing=p.dx)
     approximation = Approximation(h_factor=p.h_factor)
     probes = []
     for k, (lo, hi) in enumerate(sensor_heights(p), start=1):

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.fluid import (
-    DensityDiffusion, DensityFilter, FluidBody, FreeSurfaceDetection, Gravity, MonaghanViscosity, NewtonianViscosity,
-    ParticleShifting, Phase, TaitPressure, Walls, hydrostatic_density, lattice, tait_stored_energy, wall_box,
+    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, NewtonianViscosity, Phase, TaitPressure, Walls,
+    hydrostatic_density, lattice, stabilisation, tait_stored_energy, wall_box,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
@@ -87,14 +87,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                Walls("free_slip"), NewtonianViscosity()]
     if p.alpha > 0:
         effects.append(MonaghanViscosity(p.alpha))
-    if p.density_filter > 0:
-        effects.append(DensityFilter(p.density_filter))
-    if p.delta > 0:
-        effects.append(DensityDiffusion(p.delta))
-    if p.shifting != "off":
-        effects.append(ParticleShifting("local" if p.shifting == "local" else None))
-    if p.negative_pressure == "free_surface":
-        effects.append(FreeSurfaceDetection(every=5))
+    effects += stabilisation(delta=p.delta, shifting=p.shifting, density_filter=p.density_filter,
+                             negative_pressure=p.negative_pressure)
 
     def total_energy(state) -> float:
         s = state.fluid
@@ -178,8 +172,8 @@ def check(p: Parameters) -> list[str]:
     out = require_positive(p, "drop_diameter", "pool_width", "pool_depth", "speed", "rho", "dx", "t_end",
                            "c0_factor", "h_factor", "g")
     out += require_nonnegative(p, "viscosity", "alpha", "delta", "density_filter")
-    out += require(p.shifting in ("local", "design", "off"),
-                   f"shifting = {p.shifting!r}: choose one of local, design, off")
+    out += require(p.shifting in SHIFTING_MODES,
+                   f"shifting = {p.shifting!r}: choose one of {', '.join(SHIFTING_MODES)}")
     out += require(p.negative_pressure in NEGATIVE_PRESSURE_MODES,
                    f"negative_pressure = {p.negative_pressure!r}: choose one of {', '.join(NEGATIVE_PRESSURE_MODES)}")
     if not out:

@@ -54,8 +54,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.fluid import (
-    DensityDiffusion, DensityFilter, FluidBody, Gravity, MonaghanViscosity, NewtonianViscosity, ParticleShifting,
-    PenaltyWalls, Phase, TaitPressure, Walls, hydrostatic_density, wall_box,
+    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, NewtonianViscosity, Phase, TaitPressure, Walls,
+    hydrostatic_density, stabilisation, wall_box,
 )
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
@@ -123,14 +123,9 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                Walls(p.slip)]
     if p.alpha > 0:
         effects.append(MonaghanViscosity(p.alpha, flow=(reference_head_speed(p), p.depth)))
-    if p.density_filter > 0:
-        effects.append(DensityFilter(p.density_filter))
-    if p.delta > 0:
-        effects.append(DensityDiffusion(p.delta))
-    if p.shifting != "off":
-        effects.append(ParticleShifting("local" if p.shifting == "local" else None))
-    if p.penalty_walls:
-        effects.append(PenaltyWalls(thickness=0.25 * p.dx, reach=p.dx))
+    effects += stabilisation(delta=p.delta, shifting=p.shifting, density_filter=p.density_filter,
+                             negative_pressure=p.negative_pressure,
+                             penalty_thickness=0.25 * p.dx if p.penalty_walls else None, spacing=p.dx)
     if p.viscosity > 0:
         effects.append(NewtonianViscosity())
     n_fluid = body.n
@@ -202,8 +197,8 @@ def check(p: Parameters) -> list[str]:
     out = require_positive(p, "depth", "length", "rho_light", "rho_heavy", "dx", "t_end", "h_factor", "g",
                            "frame_every")
     out += require_nonnegative(p, "viscosity", "alpha", "delta", "c0", "density_filter")
-    out += require(p.shifting in ("local", "design", "off"),
-                   f"shifting = {p.shifting!r}: choose one of local, design, off")
+    out += require(p.shifting in SHIFTING_MODES,
+                   f"shifting = {p.shifting!r}: choose one of {', '.join(SHIFTING_MODES)}")
     out += require(p.negative_pressure in ("allow", "clamp", "cavitate"),
                    f"negative_pressure = {p.negative_pressure!r}: choose one of allow, clamp, cavitate")
     out += require_nonnegative(p, "lid_pressure_factor")

@@ -32,8 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.fluid import (
-    DensityDiffusion, DensityFilter, FluidBody, Gravity, MonaghanViscosity, ParticleShifting, Phase, TaitPressure,
-    Walls, hydrostatic_density, wall_box,
+    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, hydrostatic_density,
+    stabilisation, wall_box,
 )
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
@@ -95,12 +95,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     effects = [TaitPressure(c0, u_max=max(wave, 1e-9)), Gravity((0.0, -p.g)), Walls("free_slip")]
     if p.alpha > 0:
         effects.append(MonaghanViscosity(p.alpha, residual=p.residual_viscosity, flow=(0.5 * wave, p.depth)))
-    if p.density_filter > 0:
-        effects.append(DensityFilter(p.density_filter))
-    if p.delta > 0:
-        effects.append(DensityDiffusion(p.delta))
-    if p.shifting != "off":
-        effects.append(ParticleShifting("local" if p.shifting == "local" else None))
+    effects += stabilisation(delta=p.delta, shifting=p.shifting, density_filter=p.density_filter)
     n = body.n
     scale = (p.rho_heavy - p.rho_light) * p.g * p.depth
 
@@ -149,8 +144,8 @@ def check(p: Parameters) -> list[str]:
     out = require_positive(p, "depth", "length", "rho_light", "rho_heavy", "dx", "t_end", "h_factor", "g", "settle",
                            "frame_every")
     out += require_nonnegative(p, "alpha", "delta", "c0", "density_filter")
-    out += require(p.shifting in ("local", "design", "off"),
-                   f"shifting = {p.shifting!r}: choose one of local, design, off")
+    out += require(p.shifting in SHIFTING_MODES,
+                   f"shifting = {p.shifting!r}: choose one of {', '.join(SHIFTING_MODES)}")
     if not out:
         out += require(p.rho_heavy > p.rho_light,
                        f"rho_heavy = {p.rho_heavy:g} must exceed rho_light = {p.rho_light:g} (heavy below light)")

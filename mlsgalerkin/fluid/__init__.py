@@ -21,6 +21,7 @@ module                                 contents
 :mod:`~mlsgalerkin.fluid.filters`      :class:`DensityFilter` and its kernels
 :mod:`~mlsgalerkin.fluid.density_diffusion`  :class:`DensityDiffusion` (δ-SPH) and its kernel
 :mod:`~mlsgalerkin.fluid.shifting`     :class:`ParticleShifting` and its kernel
+:mod:`~mlsgalerkin.fluid.stabilisation`  :func:`stabilisation`: the stabilising effects from a few parameters
 :mod:`~mlsgalerkin.fluid.corrected_gradient`  the renormalised gradient of the density ratio
 :mod:`~mlsgalerkin.fluid.free_surface` :class:`FreeSurfaceDetection` and its kernels
 :mod:`~mlsgalerkin.fluid.time_step`    every time-step limit
@@ -60,6 +61,7 @@ from mlsgalerkin.fluid.integrators import Integrator, KickDriftKick, PredictorCo
 from mlsgalerkin.fluid.pair_viscosity import MonaghanViscosity, NumericalViscosityWarning, numerical_viscosity
 from mlsgalerkin.fluid.penalty_walls import PenaltyWalls
 from mlsgalerkin.fluid.shifting import ParticleShifting
+from mlsgalerkin.fluid.stabilisation import SHIFTING_MODES, stabilisation
 from mlsgalerkin.fluid.solver import FluidSolver
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.fluid.time_step import (
@@ -98,6 +100,7 @@ __all__ = [
     "TaitPressure",
     "WallBody",
     "Walls",
+    "SHIFTING_MODES",
     "acoustic_limit",
     "bulk_viscosity_limit",
     "density_diffusion_limit",
@@ -107,6 +110,7 @@ __all__ = [
     "numerical_viscosity",
     "pair_viscosity_limit",
     "particle_limit",
+    "stabilisation",
     "tait_density",
     "tait_pressure",
     "tait_sound_speed",
