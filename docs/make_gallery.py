@@ -80,9 +80,10 @@ ENTRIES: tuple[Entry, ...] = (
           "fluid runs over it to the right under the lid."),
     Entry("stratified_rest", {"t_end": 1.0, "frame_every": 1.0, "alpha": 0.1}, "speed",
           "Two-layer tank at rest",
-          "Fresh water (1000 kg/m³) over salt water (1030 kg/m³), 6 cm deep, one second after a "
-          "hydrostatic start (α = 0.1): the speeds that remain are the solver's noise, millimetres "
-          "per second against the internal-wave speed √(g′D) = 13 cm/s."),
+          "Fresh water (1000 kg/m³) over salt water (1030 kg/m³), 6 cm deep under a lid, one "
+          "second after a hydrostatic start (α = 0.1, consistent nodal integration): the speeds "
+          "that remain are the solver's noise, a tenth of a millimetre per second against the "
+          "internal-wave speed √(g′D) = 13 cm/s."),
     Entry("drop_impact", {"t_end": 0.03}, "speed",
           "Drop impact",
           "A drop 20 mm across hitting still liquid at 2 m/s (Cueto-Felgueroso et al. 2005; "

@@ -14,6 +14,7 @@ body force             ``f_i = Σ_k N_i(x_k) b_k V_k``                          
 traction               ``f_i = Σ_k N_i(x_k) t_k A_k`` (boundary points, areas A_k)   (n_nodes, d)
 velocity gradient      ``L_k = Σ_j v_j ⊗ ∇N_j(x_k)``, ``L[a, b] = ∂v_a/∂x_b``         (n_points, d, d)
 continuity rate        ``dρ_k/dt = −ρ_k tr L_k``                                      (n_points,)
+integration residual   ``e_i = Σ_k ∇N_i(x_k) V_k`` (zero when exact, interior nodes)  (n_nodes, d)
 =====================  ============================================================  ===========
 
 Linear momentum is conserved because ``Σ_i ∇N_i = 0`` (so ``Σ_i f_int,i = 0`` for any stress),
@@ -28,6 +29,8 @@ versions (``scipy.sparse`` products) used by the agreement tests.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -51,6 +54,9 @@ __all__ = [
     "internal_force_reference",
     "lumped_mass_reference",
     "velocity_gradient_reference",
+    "IntegrationTerms",
+    "integration_terms",
+    "integration_terms_reference",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -199,6 +205,45 @@ def _grad_div(indptr, indices, grads, v, L, div):
             div[k] = tr
 
 
+@numba.njit(parallel=True, cache=True)
+def _integration_terms(indptr, indices, values, grads, V, sig_v, c, n_nodes, n_blocks):
+    """Per node ``i``: ``e_i = Σ_k V_k ∇N_i(x_k)`` (columns ``:d``), ``w_i = Σ_k V_k N_i(x_k)``
+    (column ``d``), ``S_i = Σ_k N_i(x_k) (σV)_k`` (columns ``d+1:``, row-major ``d × d``), and
+    ``min_k c_k`` over the points whose row holds ``i`` (column ``nc``), in one parallel scatter
+    and one parallel reduction."""
+    n_rows = indptr.shape[0] - 1
+    dim = grads.shape[1]
+    nc = dim + 1 + dim * dim
+    edges = _thread_blocks(n_rows, n_blocks)
+    slab = np.zeros((n_blocks, n_nodes, nc + 1))
+    for blk in prange(n_blocks):
+        for i in range(n_nodes):
+            slab[blk, i, nc] = np.inf
+        for k in range(edges[blk], edges[blk + 1]):
+            vk = V[k]
+            ck = c[k]
+            for p in range(indptr[k], indptr[k + 1]):
+                i = indices[p]
+                nv = values[p]
+                for a in range(dim):
+                    slab[blk, i, a] += vk * grads[p, a]
+                slab[blk, i, dim] += vk * nv
+                for a in range(dim):
+                    for b in range(dim):
+                        slab[blk, i, dim + 1 + a * dim + b] += nv * sig_v[k, a, b]
+                if ck < slab[blk, i, nc]:
+                    slab[blk, i, nc] = ck
+    out = np.zeros((n_nodes, nc + 1))
+    for i in prange(n_nodes):
+        out[i, nc] = np.inf
+        for blk in range(n_blocks):
+            for col in range(nc):
+                out[i, col] += slab[blk, i, col]
+            if slab[blk, i, nc] < out[i, nc]:
+                out[i, nc] = slab[blk, i, nc]
+    return out
+
+
 def _n_blocks() -> int:
     return max(1, numba.get_num_threads())
 
@@ -316,6 +361,51 @@ def internal_force_and_mass(table: ShapeTable, stress_volume: FloatArray, masses
                       table.n_nodes, _n_blocks(), want_mass)
     d = table.dim
     return np.ascontiguousarray(out[:, :d]), out[:, d].copy()
+
+
+@dataclass(frozen=True)
+class IntegrationTerms:
+    """Node sums that measure how well nodal integration meets the integration constraint
+    (:func:`integration_terms`); shapes for ``n`` nodes in ``d`` dimensions.
+
+    ``residual (n, d)``: ``e_i = Σ_k ∇N_i(x_k) V_k`` (m^(d−1)); the exact ``∫∇N_i dΩ`` is zero
+    for a node whose support lies inside the domain. ``volume (n,)``: ``w_i = Σ_k N_i(x_k) V_k``
+    (m^d). ``stress_volume (n, d, d)``: ``S_i = Σ_k N_i(x_k) σ_k V_k`` (N m^(d−2)), so
+    ``S_i / w_i`` is the ``N_i``-weighted mean stress. ``lowest (n,)``: the smallest of a
+    per-point scalar over the points whose row holds node ``i`` (``inf`` for a node in no row).
+    """
+
+    residual: FloatArray
+    volume: FloatArray
+    stress_volume: FloatArray
+    lowest: FloatArray
+
+
+def integration_terms(table: ShapeTable, volumes: FloatArray, stress_volume: FloatArray,
+                      point_scalar: FloatArray) -> IntegrationTerms:
+    """:class:`IntegrationTerms` in one scatter, without input checks (for solvers):
+    ``volumes (n_points,)``, ``stress_volume = σ V (n_points, d, d)``, ``point_scalar (n_points,)``,
+    all C-contiguous float64."""
+    d = table.dim
+    out = _integration_terms(table.indptr, table.indices, table.values, table.gradients, volumes, stress_volume,
+                             point_scalar, table.n_nodes, _n_blocks())
+    return IntegrationTerms(np.ascontiguousarray(out[:, :d]), out[:, d].copy(),
+                            np.ascontiguousarray(out[:, d + 1:-1]).reshape(-1, d, d), out[:, -1].copy())
+
+
+def integration_terms_reference(table: ShapeTable, volumes: FloatArray, stress_volume: FloatArray,
+                                point_scalar: FloatArray) -> IntegrationTerms:
+    """Numpy version of :func:`integration_terms` (tests)."""
+    N = table.value_matrix()
+    G = table.gradient_matrices()
+    d = table.dim
+    e = np.stack([G[b].T @ volumes for b in range(d)], axis=1)
+    w = N.T @ volumes
+    S = np.stack([np.stack([N.T @ stress_volume[:, a, b] for b in range(d)], axis=-1) for a in range(d)], axis=1)
+    rows = np.repeat(np.arange(table.n_points), np.diff(table.indptr))
+    low = np.full(table.n_nodes, np.inf)
+    np.minimum.at(low, table.indices, np.asarray(point_scalar)[rows])
+    return IntegrationTerms(e, w, S, low)
 
 
 # --------------------------------------------------------------------------------------

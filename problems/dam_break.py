@@ -54,6 +54,7 @@ class Parameters:
     alpha: float = 0.02                 #: Monaghan artificial viscosity α (–)
     delta: float = 0.1                  #: density diffusion δ (δ-SPH); 0 drops it (–)
     shifting: str = "local"             #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
+    consistent_integration: bool = False #: nodal integration that meets the integration constraint (VCI) (bool)
     negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     penalty_walls: bool = True          #: the tank's inner surface as a penalty-contact backstop (bool)
     penalty_thickness: float = 0.25     #: contact thickness of the penalty surface / dx (–)
@@ -79,7 +80,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     if p.alpha > 0:
         effects.append(MonaghanViscosity(p.alpha, flow=(math.sqrt(2.0 * p.g * height), a)))
     effects += stabilisation(delta=p.delta, shifting=p.shifting, negative_pressure=p.negative_pressure,
-                             penalty_thickness=p.penalty_thickness * p.dx if p.penalty_walls else None, spacing=p.dx)
+                             penalty_thickness=p.penalty_thickness * p.dx if p.penalty_walls else None, spacing=p.dx,
+                             consistent_integration=p.consistent_integration)
     n_fluid = water.n
 
     def front_x(state) -> float:

@@ -53,6 +53,7 @@ class Parameters:
     alpha: float = 0.05            #: Monaghan artificial viscosity α (–)
     delta: float = 0.1             #: density diffusion δ (δ-SPH); 0 drops it (–)
     shifting: str = "local"        #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
+    consistent_integration: bool = False #: nodal integration that meets the integration constraint (VCI) (bool)
     density_filter: int = 0        #: Shepard density filter every this many steps; 0 drops it (–)
     negative_pressure: str = "allow"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     h_factor: float = 1.3          #: smoothing length / particle spacing, h/dx (–)
@@ -88,7 +89,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     if p.alpha > 0:
         effects.append(MonaghanViscosity(p.alpha))
     effects += stabilisation(delta=p.delta, shifting=p.shifting, density_filter=p.density_filter,
-                             negative_pressure=p.negative_pressure)
+                             negative_pressure=p.negative_pressure, consistent_integration=p.consistent_integration)
 
     def total_energy(state) -> float:
         s = state.fluid

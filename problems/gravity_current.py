@@ -13,7 +13,10 @@ lid on top, no-slip walls and ``c0 = 10 max(2.5 v_h, sqrt(g D))`` (7.7 m/s: ten 
 long-wave speed ``sqrt(g D) = 0.77`` m/s) are this reproduction's choices. No-slip walls are
 a laboratory tank's, with the water viscosity 1e-3 Pa s: measured at ``D = 0.04`` m and 20
 rows, free-slip walls let the head run 13–15 % fast (Froude number 0.45–0.46, near
-Benjamin's energy-conserving 0.5), no-slip walls 3–7 % slow. Stabilisation: Monaghan
+Benjamin's energy-conserving 0.5), no-slip walls 3–7 % slow (measured at commit d983bcb; the
+3 × 3 matrix of ``verification/results/fluid_core/gravity.md`` now spans −10.9 to +5.7 %).
+The particles start at the compressible hydrostatic densities
+(``hydrostatic_density(..., compressible=True)``). Stabilisation: Monaghan
 ``α = 0.02`` (a numerical viscosity ``α h c0/8``; the Reynolds number ``v_h D/ν`` it implies
 is in ``summary.json``), δ-SPH density diffusion within each phase, particle shifting and
 the tank's penalty surface; ``docs/theory/stabilisation.md`` has the measurements.
@@ -26,10 +29,12 @@ does not stay: at ``Δρ/ρ0 = 0.03``, ``D = 0.06`` m the mean pressure of the t
 620 Pa to about 0 between 0.3 and 0.8 s: the fluid expands into the gap between it and
 the wall particles (top gap 0.44 → 0.27 Δx, side gaps 0.5–0.74 → 0.34–0.41 Δx, the fluid
 volume ``Σ M/ρ`` up by 1 %), which the wall particles' pressure does not resist and the
-penalty surface, at Δx/4, does not yet reach. Pressure noise under the lid, the spread (max − min) of the top
-row's pressure after 0.2 s at ``Δρ/ρ0 = 0.03`` (``Δρ g D = 17.7`` Pa): median 98 Pa, largest
-323 Pa at the defaults; 200 / 1170 Pa without the lid pressure; 74 / 127 Pa with α = 0.1;
-43 / 112 Pa with the former defaults (α = 0.1, Shepard filter, free slip). Lower artificial
+penalty surface, at Δx/4, does not yet reach. Pressure noise under the lid: the probes
+``top_pressure_spread`` (max − min of the top row's pressure) and ``top_pressure_mean``, reported
+by ``analyse`` after 0.2 s. At ``Δρ/ρ0 = 0.03`` (``Δρ g D = 17.7`` Pa) the median spread is
+164 Pa (``verification/results/fluid_core/gravity.md``); at commit d983bcb it was 98 Pa at the
+defaults, 74 Pa with α = 0.1 and 43 Pa with the former defaults (α = 0.1, Shepard filter,
+free slip). Lower artificial
 viscosity costs quiet here. The tension floor (``negative_pressure="cavitate"``) also
 prevents the collapse, but it opens voids under the lid where the noise dips below zero
 (70 000 floorings at ``D = 0.04`` m, ``Δρ/ρ0 = 0.5``, head −11 %).
@@ -79,6 +84,7 @@ class Parameters:
     delta: float = 0.1             #: density diffusion δ (δ-SPH, same-phase pairs); 0 drops it (–)
     shifting: str = "local"        #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
     density_filter: int = 0        #: Shepard density filter every this many steps; 0 drops it (–)
+    consistent_integration: bool = False  #: nodal integration that meets the integration constraint (VCI) (bool)
     penalty_walls: bool = True     #: the tank's inner surface as a penalty-contact backstop (bool)
     negative_pressure: str = "allow"  #: tension treatment: allow, clamp or cavitate (choice)
     lid_pressure_factor: float = 1.0  #: pressure under the lid at the start / (rho_heavy g D), a closed tank's free level (–)
@@ -113,7 +119,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     body.phase[:] = (x > 0.5 * p.length).astype(np.int64)
     rho0 = body.reference_density
     top_pressure = p.lid_pressure_factor * p.rho_heavy * p.g * p.depth if p.lid else 0.0
-    body.density[:] = hydrostatic_density(rho0, p.depth - y, p.g, sound_speed(p), top_pressure)
+    body.density[:] = hydrostatic_density(rho0, p.depth - y, p.g, sound_speed(p), top_pressure, compressible=True)
     top = p.depth if p.lid else 1.5 * p.depth
     walls = wall_box((0.0, 0.0), (p.length, top), p.dx, layers=3, open_top=not p.lid,
                      reference_density=p.rho_light, surface=p.penalty_walls)
@@ -125,7 +131,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
         effects.append(MonaghanViscosity(p.alpha, flow=(reference_head_speed(p), p.depth)))
     effects += stabilisation(delta=p.delta, shifting=p.shifting, density_filter=p.density_filter,
                              negative_pressure=p.negative_pressure,
-                             penalty_thickness=0.25 * p.dx if p.penalty_walls else None, spacing=p.dx)
+                             penalty_thickness=0.25 * p.dx if p.penalty_walls else None, spacing=p.dx,
+                             consistent_integration=p.consistent_integration)
     if p.viscosity > 0:
         effects.append(NewtonianViscosity())
     n_fluid = body.n
@@ -137,11 +144,27 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
         sel = (s.phase[f] == 1) & (s.x[f, 1] < half)
         return kth_smallest(s.x[f][sel, 0], 2) - 0.5 * p.dx
 
+    def top_row_pressure(state) -> np.ndarray:
+        s = state.fluid
+        y = s.x[:n_fluid, 1]
+        return s.p[:n_fluid][y > p.depth - p.dx]
+
+    def top_pressure_spread(state) -> float:
+        top = top_row_pressure(state)
+        return float(top.max() - top.min()) if top.size else float("nan")
+
+    def top_pressure_mean(state) -> float:
+        top = top_row_pressure(state)
+        return float(top.mean()) if top.size else float("nan")
+
+    probes = [Probe("head_x", head_x)]
+    if p.lid:
+        probes += [Probe("top_pressure_spread", top_pressure_spread), Probe("top_pressure_mean", top_pressure_mean)]
     return Scene(
         [body, walls], effects, t_end=p.t_end, name="gravity_current",
         approximation=Approximation(h_factor=p.h_factor),
         output=Output(every=p.frame_every, probe_every=0.002, gif=p.gif, png=p.gif, color_by="density"),
-        probes=[Probe("head_x", head_x)],
+        probes=probes,
         parameters=dict(p.__dict__),
     )
 
@@ -181,7 +204,17 @@ def analyse(result, p: Parameters) -> dict:
     ref = reference_head_speed(p)
     rel = (fit["speed"] - ref) / ref if math.isfinite(fit["speed"]) else float("nan")
     froude = 0.4 * fit["speed"] / ref
-    return {
+    noise = {}
+    if "top_pressure_spread" in ts:
+        t = np.asarray(ts["time"])
+        late = t >= min(0.2, 0.5 * t[-1])
+        spread = np.asarray(ts["top_pressure_spread"])[late]
+        mean = np.asarray(ts["top_pressure_mean"])[late]
+        scale = (p.rho_heavy - p.rho_light) * p.g * p.depth
+        noise = {"top_pressure_spread_median_pa": float(np.median(spread)), "top_pressure_spread_max_pa": float(spread.max()),
+                 "top_pressure_spread_median_over_drho_g_d": float(np.median(spread) / scale),
+                 "top_pressure_mean_start_pa": float(mean[0]), "top_pressure_mean_end_pa": float(mean[-1])}
+    return {**noise,
         "head_speed_m_s": fit["speed"], "reference_head_speed_m_s": ref, "relative_error": rel,
         "froude_number": froude, "energy_conserving_froude_number": 0.5,
         "rows_per_depth": p.depth / p.dx,

@@ -4,8 +4,12 @@ A tank ``length`` long holds heavy fluid (``rho_heavy``) below ``depth/2`` and l
 (``rho_light``) above, to ``depth``, with a free surface (or a rigid lid, ``lid``). The exact
 state is rest with the hydrostatic pressure
 
-.. math:: p(y) = \rho_l g (D - y)\ (y > D/2),\qquad
-          p(y) = \rho_l g D/2 + \rho_h g (D/2 - y)\ (y < D/2).
+.. math:: p(y) \approx \rho_l g (D - y)\ (y > D/2),\qquad
+          p(y) \approx \rho_l g D/2 + \rho_h g (D/2 - y)\ (y < D/2),
+
+exactly the equilibrium ``dp/dy = −ρ(p) g`` of each layer's Tait fluid (the particles start at
+its densities; the incompressible profile would leave them 0.5 % too light at the bottom, and
+the tank would sink into a pressure profile 2 Pa away from it, 11 % of ``Δρ g D``).
 
 The slow flows of stratified fluids (gravity currents, internal waves) run at speeds of
 order ``sqrt(g' D)`` with ``g' = g Δρ/ρ_l`` and pressure differences of order ``Δρ g D``, far
@@ -16,12 +20,12 @@ from the exact profile over ``Δρ g D`` (under a lid, after removing the mean d
 lid's pressure level is free). ``analyse`` reports both over the last ``settle`` seconds and
 their maxima.
 
-Measured (``verification/results/fluid_core/rest.md``): the solver does not hold this state
-quietly enough. Over 5 s at 20 rows the largest speed grows to tens of per cent of
-``sqrt(g' D)`` — with α = 0.02 and with α = 0.1, with or without density diffusion and
-shifting, with a free surface or a lid — the slow growth of the velocity modes that nodal
-integration does not see (``docs/theory/stabilisation.md`` §4). The default α = 0.1 is the
-quietest measured.
+Measured (``verification/results/fluid_core/rest.md``, 5 s, under the lid at α = 0.1): with the
+consistent nodal integration (``consistent_integration``, the default here) the largest speed
+stays at 0.49 % of ``sqrt(g' D)`` and the pressure RMS deviation at 1.5 % of ``Δρ g D`` at
+20 rows, and at 0.21 % and 0.16 % at 40 rows. Without it the lattice shears under the
+pressure and the speed grows to 48 %. Two cases still drift (``docs/theory/stabilisation.md``
+§6): α = 0.02, and a free surface (``lid=False``).
 """
 
 from __future__ import annotations
@@ -32,8 +36,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.fluid import (
-    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, hydrostatic_density,
-    stabilisation, wall_box,
+    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, hydrostatic_pressure,
+    stabilisation, tait_density, wall_box,
 )
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
@@ -57,7 +61,8 @@ class Parameters:
     delta: float = 0.1             #: density diffusion δ (δ-SPH, same-phase pairs); 0 drops it (–)
     shifting: str = "local"        #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
     density_filter: int = 0        #: Shepard density filter every this many steps; 0 drops it (–)
-    lid: bool = False              #: rigid lid on top instead of a free surface (bool)
+    consistent_integration: bool = True  #: nodal integration that meets the integration constraint (VCI) (bool)
+    lid: bool = True               #: rigid lid on top; false: a free surface (bool)
     h_factor: float = 1.3          #: smoothing length / particle spacing, h/dx (–)
     g: float = 9.81                #: gravitational acceleration (m/s²)
     settle: float = 1.0            #: the final interval over which analyse averages (s)
@@ -71,10 +76,15 @@ def sound_speed(p: Parameters) -> float:
 
 
 def exact_pressure(p: Parameters, y: np.ndarray) -> np.ndarray:
-    """The hydrostatic pressure (Pa) of the two layers at heights ``y`` (m)."""
+    """The hydrostatic pressure (Pa) of the two layers of Tait fluid at heights ``y`` (m): each
+    layer's exact equilibrium ``dp/dy = −ρ(p) g`` (:func:`~mlsgalerkin.fluid.hydrostatic_pressure`),
+    0.5 % above ``ρ g (D − y)`` at the bottom because the fluid is denser there."""
+    c0 = sound_speed(p)
     half = 0.5 * p.depth
-    return np.where(y > half, p.rho_light * p.g * (p.depth - y),
-                    p.rho_light * p.g * half + p.rho_heavy * p.g * (half - y))
+    interface = hydrostatic_pressure(p.rho_light, half, p.g, c0, compressible=True)
+    light = hydrostatic_pressure(p.rho_light, p.depth - y, p.g, c0, compressible=True)
+    heavy = hydrostatic_pressure(p.rho_heavy, half - y, p.g, c0, interface, compressible=True)
+    return np.where(y > half, light, heavy)
 
 
 def make_scene(p: Parameters = Parameters()) -> Scene:
@@ -84,9 +94,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     y = body.positions[:, 1]
     body.phase[:] = (y < 0.5 * p.depth).astype(np.int64)
     c0 = sound_speed(p)
-    overburden = np.where(body.phase == 1, p.rho_light * p.g * 0.5 * p.depth, 0.0)
-    depth_in_layer = np.where(body.phase == 1, 0.5 * p.depth - y, p.depth - y)
-    body.density[:] = hydrostatic_density(body.reference_density, depth_in_layer, p.g, c0, overburden)
+    body.density[:] = tait_density(exact_pressure(p, y), body.reference_density, c0)
     top = p.depth if p.lid else 2.0 * p.depth
     walls = wall_box((0.0, 0.0), (p.length, top), p.dx, layers=3, open_top=not p.lid,
                      reference_density=p.rho_light)
@@ -95,7 +103,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     effects = [TaitPressure(c0, u_max=max(wave, 1e-9)), Gravity((0.0, -p.g)), Walls("free_slip")]
     if p.alpha > 0:
         effects.append(MonaghanViscosity(p.alpha, residual=p.residual_viscosity, flow=(0.5 * wave, p.depth)))
-    effects += stabilisation(delta=p.delta, shifting=p.shifting, density_filter=p.density_filter)
+    effects += stabilisation(delta=p.delta, shifting=p.shifting, density_filter=p.density_filter,
+                             consistent_integration=p.consistent_integration)
     n = body.n
     scale = (p.rho_heavy - p.rho_light) * p.g * p.depth
 

@@ -21,6 +21,8 @@ module                                 contents
 :mod:`~mlsgalerkin.fluid.filters`      :class:`DensityFilter` and its kernels
 :mod:`~mlsgalerkin.fluid.density_diffusion`  :class:`DensityDiffusion` (δ-SPH) and its kernel
 :mod:`~mlsgalerkin.fluid.shifting`     :class:`ParticleShifting` and its kernel
+:mod:`~mlsgalerkin.fluid.consistent_integration`  :class:`ConsistentIntegration`: nodal
+                                       integration that meets the integration constraint
 :mod:`~mlsgalerkin.fluid.stabilisation`  :func:`stabilisation`: the stabilising effects from a few parameters
 :mod:`~mlsgalerkin.fluid.corrected_gradient`  the renormalised gradient of the density ratio
 :mod:`~mlsgalerkin.fluid.free_surface` :class:`FreeSurfaceDetection` and its kernels
@@ -42,6 +44,7 @@ from mlsgalerkin.fluid.bodies import (
     particle_limit,
     wall_box,
 )
+from mlsgalerkin.fluid.consistent_integration import ConsistentIntegration
 from mlsgalerkin.fluid.density_diffusion import DensityDiffusion
 from mlsgalerkin.fluid.effect import Effect
 from mlsgalerkin.fluid.eos import (
@@ -49,6 +52,7 @@ from mlsgalerkin.fluid.eos import (
     TaitEOS,
     TaitPressure,
     hydrostatic_density,
+    hydrostatic_pressure,
     tait_density,
     tait_pressure,
     tait_sound_speed,
@@ -77,6 +81,7 @@ from mlsgalerkin.fluid.walls import Walls
 
 __all__ = [
     "BulkViscosity",
+    "ConsistentIntegration",
     "DensityDiffusion",
     "DensityFilter",
     "Effect",
@@ -106,6 +111,7 @@ __all__ = [
     "density_diffusion_limit",
     "force_limit",
     "hydrostatic_density",
+    "hydrostatic_pressure",
     "lattice",
     "numerical_viscosity",
     "pair_viscosity_limit",
