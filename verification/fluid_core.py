@@ -6,6 +6,7 @@ cavitation floor, and the ablation of each stabilising term. Every row records t
     python verification/fluid_core.py --section impact --out verification/results/fluid_core
     python verification/fluid_core.py --section all --out verification/results/fluid_core
     python verification/fluid_core.py --section impact --quick --out results/fluid_core_quick   # smoke
+    python verification/fluid_core.py --section ablation --rerun gravity   # run the matching cases, re-analyse the rest
 
 Sections: ``impact`` (dam_break_impact at H/dx = 40 and 80, ``--finest 160`` adds 160),
 ``dam_break`` (Martin & Moyce through the wall impact), ``gravity`` (head speed for three
@@ -22,6 +23,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 import time
 from pathlib import Path
@@ -137,6 +139,17 @@ def reanalysed(problem: str, label: str, overrides: dict, runs: Path) -> dict:
     return row
 
 
+def runner(args):
+    """``run`` or ``reanalysed`` per case: ``--reanalyse`` rebuilds every row from its saved run,
+    ``--rerun PATTERN`` runs only the cases whose label matches the regular expression and
+    rebuilds the others."""
+    def one(problem: str, label: str, overrides: dict, runs: Path) -> dict:
+        if args.reanalyse or (args.rerun and not re.search(args.rerun, label)):
+            return reanalysed(problem, label, overrides, runs)
+        return run(problem, label, overrides, runs)
+    return one
+
+
 def write_table(out: Path, name: str, rows: list[dict], title: str, notes: str, columns: list[str]) -> None:
     keys = [c for c in columns if any(c in r for r in rows)]
     atomic_write(out / f"{name}.csv", csv_text(keys, [[format_cell(r.get(k, "")) for k in keys] for r in rows]))
@@ -159,7 +172,7 @@ IMPACT_COLUMNS = ["case", "status", "t_reached_s", "fluid_particles", "steps", "
 
 
 def section_impact(args, out: Path, runs: Path) -> None:
-    one = reanalysed if args.reanalyse else run
+    one = runner(args)
     rows = [one("dam_break_impact", label, ov, runs) for label, ov in impact_cases(args.quick, args.finest)]
     write_table(out, "impact", rows, "Dam break with wall impact (Zhou et al. 1999 tank) against De Courcy et al. (2024)",
                 """Pressure p/(rho g H) at the four sensors of the downstream wall against the converged
@@ -261,7 +274,8 @@ impact (t = 0.27 s) and the run-up to the problem's default end, t = 0.4 s (T = 
 
 
 def section_gravity(args, out: Path, runs: Path) -> None:
-    rows = [run("gravity_current", label, ov, runs) for label, ov in gravity_cases(args.quick)]
+    one = runner(args)
+    rows = [one("gravity_current", label, ov, runs) for label, ov in gravity_cases(args.quick)]
     write_table(out, "gravity", rows, "Gravity current head speed at 20 rows per depth",
                 """Head speed against 0.4 sqrt(g D drho/rho0) (Rottman & Simpson 1983). Goal: within 10 %.
 Each case with direct nodal integration and with the consistent one (`consistent_integration`,
@@ -275,7 +289,8 @@ row's pressure after 0.2 s, its median and largest value, and the mean top-row p
 
 
 def section_rest(args, out: Path, runs: Path) -> None:
-    rows = [run("stratified_rest", label, ov, runs) for label, ov in rest_cases(args.quick)]
+    one = runner(args)
+    rows = [one("stratified_rest", label, ov, runs) for label, ov in rest_cases(args.quick)]
     write_table(out, "rest", rows, "Two-layer tank at rest (1000/1030 kg/m3)",
                 """Largest spurious speed over sqrt(g' D) and the RMS pressure deviation from the
 hydrostatic profile (each layer's exact Tait equilibrium) over drho g D; under the lid the
@@ -286,13 +301,15 @@ mean deviation is removed (the lid's pressure level is free). Goal: below 1 % an
 
 def section_drop(args, out: Path, runs: Path) -> None:
     rows = []
+    one = runner(args)
     for label, ov in drop_cases(args.quick):
-        for mode in ("cavitate", "allow"):
-            rows.append(run("drop_impact", f"{label}, negative_pressure={mode}",
+        for mode in ("cavitate", "free_surface", "allow"):
+            rows.append(one("drop_impact", f"{label}, negative_pressure={mode}",
                             dict(ov, negative_pressure=mode, delta=0.1, shifting="local", density_filter=0), runs))
     write_table(out, "drop", rows, "Drop impact without the cavitation floor",
-                """Drop impact at 2, 5 and 10 m/s with density diffusion and shifting, with and without
-the cavitation floor (negative_pressure = cavitate / allow).""",
+                """Drop impact at 2, 5 and 10 m/s with density diffusion and shifting: the cavitation floor
+on every particle (cavitate), on the free-surface particles only (free_surface), and none
+(allow).""",
                 ["case", "status", "t_reached_s", "fluid_particles", "steps", "energy_initial_J", "energy_final_J",
                  "energy_max_growth_relative_to_initial_kinetic", "max_penetration_dx",
                  "wall_time_s"])
@@ -315,6 +332,8 @@ GRAVITY_ABLATION = [
     ("no density diffusion", {"delta": 0.0}),
     ("no shifting", {"shifting": "off"}),
     ("free-slip walls", {"slip": "free_slip"}),
+    ("alpha = 0.02 (the default before)", {"alpha": 0.02}),
+    ("alpha = 0", {"alpha": 0.0}),
     ("consistent integration added", {"consistent_integration": True}),
     ("former defaults: alpha 0.1, c0 = 10 m/s, Shepard filter, free slip, tension allowed",
      {"alpha": 0.1, "c0": 10.0, "delta": 0.0, "shifting": "off", "density_filter": 20, "slip": "free_slip",
@@ -324,14 +343,15 @@ GRAVITY_ABLATION = [
 
 def section_ablation(args, out: Path, runs: Path) -> None:
     rows = []
+    one = runner(args)
     base_impact = {"dx": 0.06, "t_end": 0.6} if args.quick else {"dx": 0.6 / 40}
     for label, ov in ABLATION[:2] if args.quick else ABLATION:
-        rows.append(run("dam_break_impact", f"impact H/dx={0.6 / base_impact['dx']:.0f}: {label}",
+        rows.append(one("dam_break_impact", f"impact H/dx={0.6 / base_impact['dx']:.0f}: {label}",
                         dict(base_impact, **ov), runs))
     base_gc = {"dx": 0.012, "t_end": 0.3, "gif": False} if args.quick else \
         {"depth": 0.04, "length": 0.34 * 0.04 / 0.06, "rho_heavy": 1100.0, "dx": 0.002, "t_end": 1.6, "gif": False}
     for label, ov in GRAVITY_ABLATION[:2] if args.quick else GRAVITY_ABLATION:
-        rows.append(run("gravity_current", f"gravity D=0.04 drho=0.1: {label}", dict(base_gc, **ov), runs))
+        rows.append(one("gravity_current", f"gravity D=0.04 drho=0.1: {label}", dict(base_gc, **ov), runs))
     write_table(out, "ablation", rows, "Ablation: each stabilising term off in turn",
                 """Dam break with impact (H/dx = 40, to T = 7) and the weakly stratified gravity current
 (D = 0.04 m, drho/rho0 = 0.1, 20 rows): completes or not, the measures of each problem and the cost.""",
@@ -347,7 +367,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--runs", default="results/fluid_core_runs")
     ap.add_argument("--quick", action="store_true", help="tiny runs (a smoke test of this script)")
     ap.add_argument("--reanalyse", action="store_true",
-                    help="impact section: rebuild the table from the run directories in --runs (no simulation)")
+                    help="rebuild the tables from the run directories in --runs (no simulation)")
+    ap.add_argument("--rerun", default=None, metavar="PATTERN",
+                    help="run only the cases whose label matches this regular expression; rebuild the others "
+                         "from their run directories")
     ap.add_argument("--finest", type=int, default=80, help="finest H/dx of the impact section (40, 80 or 160)")
     args = ap.parse_args(argv)
     out, runs = Path(args.out), Path(args.runs)
