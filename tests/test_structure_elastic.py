@@ -1,0 +1,83 @@
+"""Elastic bodies on scikit-fem (:mod:`mlsgalerkin.structure.elastic`): the cantilever against
+Timoshenko beam theory, the first bending period of the clamped beam of the dam-break case
+against Euler–Bernoulli, energy of undamped central differences, and bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from scipy.sparse.linalg import eigsh
+from skfem import MeshQuad
+
+from mlsgalerkin.structure import ElasticBody, ElasticMaterial
+
+
+def cantilever(nx: int, ny: int, element: str, L=1.0, h=0.1, E=1e7, nu=0.0, rho=1000.0, plane="stress"):
+    mesh = MeshQuad.init_tensor(np.linspace(0.0, L, nx + 1), np.linspace(0.0, h, ny + 1))
+    return ElasticBody("beam", mesh, ElasticMaterial(E, nu, rho, plane=plane), element=element,
+                       clamped=lambda x: np.isclose(x[0], 0.0))
+
+
+@pytest.mark.parametrize("element, tol", [("Q2", 1e-3), ("Q1", 2e-2)])
+def test_cantilever_tip_deflection_against_timoshenko(element, tol):
+    """δ = P L³/(3 E I) + P L/(κ G A), κ = 5/6, a shear traction P/h on the free end (ν = 0,
+    plane stress: the 2D body is the beam). Measured: Q2 −0.005 %, Q1 −0.8 % (shear locking)."""
+    L, h, E, P = 1.0, 0.1, 1e7, 10.0
+    b = cantilever(40 if element == "Q2" else 80, 4 if element == "Q2" else 8, element)
+    u = b.static(b.edge_traction(lambda x: np.isclose(x[0], L), (0.0, -P / h)))
+    tip = b.displacement_at(np.array([[L], [h / 2]]), u)[0, 1]
+    ref = -(P * L**3 / (3 * E * h**3 / 12) + P * L / (5 / 6 * E / 2 * h))
+    assert abs(tip - ref) < tol * abs(ref)
+
+
+def test_clamped_beam_first_period():
+    """The clamped elastic beam of the dam break on a beam: E = 0.2 GPa, 6 mm thick, 47.16 kg/m²
+    (ρ = 7860 kg/m³), 0.304 m long. Euler–Bernoulli: T1 = 2π L² / (1.8751² sqrt(EI/m)) = 0.5977 s
+    (0.5971 s quoted). Plane stress maps the 2D body to the beam (plane strain would stiffen it by
+    1/(1 − ν²), shortening the period by about 5 % at ν = 0.3)."""
+    L, h, E, rho = 0.304, 0.006, 0.2e9, 47.16 / 0.006
+    b = cantilever(76, 3, "Q2", L=L, h=h, E=E, nu=0.3, rho=rho, plane="stress")
+    free = b.free
+    K = b.stiffness[free][:, free]
+    M = sp.diags(b.lumped_mass[free])
+    w2 = eigsh(K, k=1, M=M, sigma=0.0, which="LM", return_eigenvectors=False)[0]
+    period = 2 * np.pi / np.sqrt(w2)
+    beam = 2 * np.pi * L**2 / (1.8751**2 * np.sqrt(E * h**3 / 12 / (rho * h)))
+    assert abs(period - beam) < 0.02 * beam
+    assert abs(period - 0.5971) < 0.02 * 0.5971
+
+
+def test_central_differences_keep_the_energy_of_free_vibration():
+    """Released from its static deflection, the undamped cantilever keeps kinetic + strain
+    energy within 0.5 % over 10 periods at 0.9 of the stable step."""
+    L, h, P = 1.0, 0.1, 10.0
+    b = cantilever(10, 2, "Q2")
+    b.u[:] = b.static(b.edge_traction(lambda x: np.isclose(x[0], L), (0.0, -P / h)))
+    e0 = sum(b.energies(np.zeros_like(b.u)))
+    dt = 0.9 * b.stable_time_step()
+    free = b.free
+    w2 = eigsh(b.stiffness[free][:, free], k=1, M=sp.diags(b.lumped_mass[free]), sigma=0.0, which="LM",
+               return_eigenvectors=False)[0]
+    steps = int(10 * 2 * np.pi / np.sqrt(w2) / dt)
+    drift = 0.0
+    b.v[:] = 0.5 * dt * b.internal_force() / b.lumped_mass   # v^{-1/2} = -(dt/2) a^0: at rest at t = 0
+    for _ in range(steps):
+        u_old = b.u.copy()
+        b.step(dt)
+        v_mid = b.v.copy()
+        # energy at the half step: kinetic of v^{n+1/2}, strain of the mean displacement
+        u_mean = 0.5 * (u_old + b.u)
+        e = 0.5 * float(np.dot(b.lumped_mass * v_mid, v_mid)) + 0.5 * float(u_mean @ (b.stiffness @ u_mean))
+        drift = max(drift, abs(e - e0) / e0)
+    assert drift < 5e-3
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="poisson"):
+        ElasticMaterial(1e7, 0.5, 1000.0)
+    with pytest.raises(ValueError, match="plane"):
+        ElasticMaterial(1e7, 0.3, 1000.0, plane="axisymmetric")
+    mesh = MeshQuad.init_tensor(np.linspace(0, 1, 3), np.linspace(0, 1, 3))
+    with pytest.raises(ValueError, match="element"):
+        ElasticBody("b", mesh, ElasticMaterial(1e7, 0.3, 1000.0), element="Q8")
