@@ -42,7 +42,7 @@ from mlsgalerkin.fluid import (
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.fluid.sensors import pressure_at, sensor_points
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
-from mlsgalerkin.scene import Approximation, Output, Probe, Scene
+from mlsgalerkin.scene import MAX_FRAMES, Approximation, Output, Probe, Scene
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "load_reference", "sensor_heights", "SMOKE"]
 
@@ -228,6 +228,9 @@ def check(p: Parameters) -> list[str]:
     out += require(p.negative_pressure in NEGATIVE_PRESSURE_MODES,
                    f"negative_pressure = {p.negative_pressure!r}: choose one of {', '.join(NEGATIVE_PRESSURE_MODES)}")
     if not out:
+        out += require(p.t_end / p.frame_every <= MAX_FRAMES,
+                       f"frame_every = {p.frame_every:g} s asks for {p.t_end / p.frame_every:,.0f} frames over t_end = "
+                       f"{p.t_end:g} s, more than {MAX_FRAMES:,}; choose frame_every >= {p.t_end / MAX_FRAMES:g} s")
         out += require(p.height >= 8 * p.dx,
                        f"dx = {p.dx:g} m leaves fewer than 8 particles over the {p.height:g} m column; "
                        f"choose dx <= {p.height / 8:g} m")

@@ -32,6 +32,8 @@ from skfem import LinearForm, condense, solve
 from skfem.helpers import dot
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 
+from mlsgalerkin.contact import ContactSurface
+
 __all__ = ["ElasticMaterial", "ElasticBody", "ELEMENTS"]
 
 FloatArray = NDArray[np.float64]
@@ -100,7 +102,7 @@ class ElasticBody:
     def edge_traction(self, facets: Callable[[FloatArray], FloatArray], traction: tuple[float, float]) -> FloatArray:
         """Nodal forces ``(N,)`` of a uniform traction ``traction`` (Pa) on the boundary facets
         where ``facets(x)`` is true: ``f_i = ∫ t · φ_i ds``."""
-        fb = FacetBasis(self.mesh, self.basis.elem, facets=self.mesh.facets_satisfying(facets))
+        fb = FacetBasis(self.mesh, self.basis.elem, facets=self.mesh.facets_satisfying(facets, boundaries_only=True))
         t = np.asarray(traction, dtype=float)
 
         @LinearForm
@@ -119,6 +121,32 @@ class ElasticBody:
         u = self.u if u is None else u
         P = self.basis.probes(np.asarray(points, dtype=float))
         return (P @ u).reshape(2, -1).T
+
+    def vertex_displacement(self, vertices: NDArray[np.int64], u: FloatArray | None = None) -> FloatArray:
+        """Displacement ``(k, 2)`` (m) of the mesh vertices ``vertices`` (their nodal degrees of freedom)."""
+        u = self.u if u is None else u
+        return u[self.basis.nodal_dofs[:, vertices]].T
+
+    def surface(self, facets: Callable[[FloatArray], FloatArray] | None = None,
+                u: FloatArray | None = None) -> tuple[ContactSurface, NDArray[np.int64]]:
+        """The wet surface in the current configuration: the boundary facets where ``facets(x)``
+        is true (all boundary facets if ``None``) as a :class:`~mlsgalerkin.contact.ContactSurface`
+        of straight segments between the facets' vertices, each oriented from its owning element
+        (scikit-fem sorts facet nodes) so that the normal points out of the body; and the mesh
+        vertex of each surface node ``(m,)``."""
+        mesh = self.mesh
+        chosen = mesh.boundary_facets() if facets is None else mesh.facets_satisfying(facets, boundaries_only=True)
+        ends = mesh.facets[:, chosen].T.copy()                      # (k, 2) sorted vertex pairs
+        owner = mesh.f2t[0, chosen]
+        centre = mesh.p[:, mesh.t[:, owner]].mean(axis=1).T         # (k, 2) owning element centroids
+        a, b = mesh.p[:, ends[:, 0]].T, mesh.p[:, ends[:, 1]].T
+        t = b - a
+        normal = np.stack([t[:, 1], -t[:, 0]], axis=1)
+        flip = np.einsum("kd,kd->k", normal, 0.5 * (a + b) - centre) < 0
+        ends[flip] = ends[flip][:, ::-1]
+        vertices, local = np.unique(ends, return_inverse=True)
+        nodes = mesh.p[:, vertices].T + self.vertex_displacement(vertices, u)
+        return ContactSurface(nodes, local.reshape(-1, 2)), vertices
 
     def internal_force(self, u: FloatArray | None = None) -> FloatArray:
         """``K u`` ``(N,)`` in N (per unit depth), zero on the clamped degrees of freedom."""
