@@ -25,8 +25,6 @@ Run::
 from __future__ import annotations
 
 import argparse
-import datetime as dt
-import subprocess
 import sys
 import warnings
 from collections.abc import Sequence
@@ -35,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_neighbors import measure  # noqa: E402
+from bench_neighbors import measure, provenance_line  # noqa: E402
 
 
 def tank(rows: int):
@@ -99,16 +97,7 @@ def markdown(table: list[dict]) -> list[str]:
 
 
 def provenance() -> str:
-    import numba
-
-    try:
-        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                                cwd=Path(__file__).resolve().parent, timeout=10).stdout.strip()
-    except OSError:
-        commit = "?"
-    return (f"Command: `{' '.join(['.venv/bin/python', 'benchmarks/bench_consistent_integration.py', *sys.argv[1:]])}`, "
-            f"commit `{commit or '?'}`, {dt.date.today().isoformat()}, numba {numba.__version__} with "
-            f"{numba.get_num_threads()} thread(s).")
+    return provenance_line("benchmarks/bench_consistent_integration.py", sys.argv[1:])
 
 
 def main(argv: Sequence[str] | None = None) -> int:

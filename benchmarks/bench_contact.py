@@ -49,9 +49,7 @@ only, boxes in numba) the 2D kernel did 1.8×10⁶ pairs/s at 1e4 slaves and the
 from __future__ import annotations
 
 import argparse
-import datetime as dt
 import gc
-import subprocess
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -61,7 +59,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_fluid_step import FILTER_EVERY, WARMUP_STEPS, _time_block  # noqa: E402
-from bench_neighbors import OtherLoad, measure  # noqa: E402
+from bench_neighbors import OtherLoad, measure, provenance_line  # noqa: E402
 
 #: Slave counts of the kernel benchmark, numba and reference.
 SIZES = (10_000, 100_000, 1_000_000)
@@ -221,16 +219,7 @@ def markdown(kernel: list[dict], fluid: list[dict]) -> list[str]:
 
 
 def provenance() -> str:
-    import numba
-
-    try:
-        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                                cwd=Path(__file__).resolve().parent, timeout=10).stdout.strip()
-    except OSError:
-        commit = "?"
-    return (f"Command: `{' '.join(['.venv/bin/python', 'benchmarks/bench_contact.py', *sys.argv[1:]])}`, commit "
-            f"`{commit or '?'}`, {dt.date.today().isoformat()}, numba {numba.__version__} with "
-            f"{numba.get_num_threads()} thread(s).")
+    return provenance_line("benchmarks/bench_contact.py", sys.argv[1:])
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -157,6 +157,24 @@ def measure(
     return best
 
 
+def provenance_line(script: str, argv: Sequence[str]) -> str:
+    """One line for a benchmark table: the command (``script`` and ``argv``), the commit, the
+    date, and numba's version and thread count."""
+    import datetime as dt
+    import subprocess
+    from pathlib import Path
+
+    import numba
+
+    try:
+        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                                cwd=Path(__file__).resolve().parent, timeout=10).stdout.strip()
+    except OSError:
+        commit = "?"
+    return (f"Command: `{' '.join(['.venv/bin/python', script, *argv])}`, commit `{commit or '?'}`, "
+            f"{dt.date.today().isoformat()}, numba {numba.__version__} with {numba.get_num_threads()} thread(s).")
+
+
 def run(
     sizes: Sequence[int] = SIZES,
     dims: Sequence[int] = (2, 3),

@@ -5,8 +5,8 @@ Usage (from the repository's root)::
     python docs/make_gallery.py               # run every problem, draw, write the page
     python docs/make_gallery.py --only dam_break
     python docs/make_gallery.py --dry-run     # rewrite the page from docs/gallery/gallery.json
-    python docs/make_gallery.py --runs /tmp/g # keep the run directories ...
-    python docs/make_gallery.py --runs /tmp/g --redraw   # ... and redraw from them
+    python docs/make_gallery.py --runs results/gallery_runs   # keep the run directories ...
+    python docs/make_gallery.py --runs results/gallery_runs --redraw   # ... and redraw from them
 
 Each problem runs at a small size up to its interesting moment (the dam break's surge, the
 gravity current's head, the drop's crown, the waves in the tank) in a temporary directory,

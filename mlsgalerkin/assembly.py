@@ -393,21 +393,6 @@ def integration_terms(table: ShapeTable, volumes: FloatArray, stress_volume: Flo
                             np.ascontiguousarray(out[:, d + 1:-1]).reshape(-1, d, d), out[:, -1].copy())
 
 
-def integration_terms_reference(table: ShapeTable, volumes: FloatArray, stress_volume: FloatArray,
-                                point_scalar: FloatArray) -> IntegrationTerms:
-    """Numpy version of :func:`integration_terms` (tests)."""
-    N = table.value_matrix()
-    G = table.gradient_matrices()
-    d = table.dim
-    e = np.stack([G[b].T @ volumes for b in range(d)], axis=1)
-    w = N.T @ volumes
-    S = np.stack([np.stack([N.T @ stress_volume[:, a, b] for b in range(d)], axis=-1) for a in range(d)], axis=1)
-    rows = np.repeat(np.arange(table.n_points), np.diff(table.indptr))
-    low = np.full(table.n_nodes, np.inf)
-    np.minimum.at(low, table.indices, np.asarray(point_scalar)[rows])
-    return IntegrationTerms(e, w, S, low)
-
-
 # --------------------------------------------------------------------------------------
 # numpy references (tests)
 # --------------------------------------------------------------------------------------
@@ -426,3 +411,18 @@ def internal_force_reference(table: ShapeTable, stress: FloatArray, volumes: Flo
 def velocity_gradient_reference(table: ShapeTable, velocity: FloatArray) -> FloatArray:
     G = table.gradient_matrices()
     return np.stack([G[b] @ velocity for b in range(table.dim)], axis=-1)
+
+
+def integration_terms_reference(table: ShapeTable, volumes: FloatArray, stress_volume: FloatArray,
+                                point_scalar: FloatArray) -> IntegrationTerms:
+    """Numpy version of :func:`integration_terms` (tests)."""
+    N = table.value_matrix()
+    G = table.gradient_matrices()
+    d = table.dim
+    e = np.stack([G[b].T @ volumes for b in range(d)], axis=1)
+    w = N.T @ volumes
+    S = np.stack([np.stack([N.T @ stress_volume[:, a, b] for b in range(d)], axis=-1) for a in range(d)], axis=1)
+    rows = np.repeat(np.arange(table.n_points), np.diff(table.indptr))
+    low = np.full(table.n_nodes, np.inf)
+    np.minimum.at(low, table.indices, np.asarray(point_scalar)[rows])
+    return IntegrationTerms(e, w, S, low)

@@ -199,6 +199,6 @@ class ConsistentIntegration(Effect):
         self._chi = chi[f]
 
     def summary(self) -> dict[str, Any]:
-        chi = getattr(self, "_chi", None)
+        chi = self._chi
         share = float(np.mean(chi >= 1.0)) if chi is not None and chi.size else float("nan")
         return {"full_correction_share_at_end": share, "none": self.none, "full": self.full}
