@@ -12,7 +12,10 @@ the solver that advances them (every :class:`Body` names its solver class), and 
    (:meth:`Solver.add_surface_forces`);
 4. calls :meth:`Solver.end_step` on every solver: each evaluates its forces at ``t + Δt``,
    including what the interactions added, and completes the step (the final kick);
-5. hands the :class:`~mlsgalerkin.simulation.RunState` to the monitors.
+5. calls :meth:`Interaction.after_step` on every interaction: forces that one solver computed
+   in its ``end_step`` (the fluid's reaction on wall particles riding on a structure) go to the
+   other body for its next step;
+6. hands the :class:`~mlsgalerkin.simulation.RunState` to the monitors.
 
 A body kind that should take part implements a :class:`Body` (data: geometry, material,
 initial state) and a :class:`Solver` (state and how it advances, with its own integrator and
@@ -67,7 +70,11 @@ class Surface:
         outward normal is the segment direction turned clockwise; 3D: triangles,
         counter-clockwise seen from outside). Empty ``(0, d)`` for a point set (slave nodes).
     masses : (n,) float array
-        Nodal masses (kg, per unit depth in 2D), for penalty stiffness and time-step limits.
+        Nodal masses (kg, per unit depth in 2D), for penalty stiffness and time-step limits;
+        ``None`` for a rigid body (infinite mass as seen by one node).
+    accelerations : (n, d) float array, optional
+        Surface node accelerations (m/s²), for a wall treatment that sees the surface's
+        acceleration (the pressure of wall particles riding on a structure).
     """
 
     body: str
@@ -75,6 +82,7 @@ class Surface:
     velocities: NDArray[np.float64]
     segments: NDArray[np.int64] = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
     masses: NDArray[np.float64] | None = None
+    accelerations: NDArray[np.float64] | None = None
 
 
 class Solver(ABC):
@@ -169,6 +177,12 @@ class Interaction(ABC):
     @abstractmethod
     def exchange(self, t: float, first: Solver, second: Solver) -> None:
         """Compute the forces at time ``t`` and add them to both bodies."""
+
+    def after_step(self, t: float, first: Solver, second: Solver) -> None:
+        """Called once more after every solver's :meth:`Solver.end_step` at time ``t``: for
+        forces that only exist once a solver has evaluated its own (the reaction of the fluid on
+        wall particles riding on a structure), added to the other body for its next step. The
+        surface forces are cleared before the next :meth:`exchange`, not before this call."""
 
     def stable_time_step(self) -> float:
         """Largest stable time step this interaction allows (s); ``inf`` if none."""

@@ -9,7 +9,9 @@ per step of size ``Δt = min(solver and interaction limits, t_end − t)``:
 2. every interaction's :meth:`~mlsgalerkin.dynamics.Interaction.exchange` (forces at
    ``t + Δt`` on both bodies);
 3. every solver's :meth:`~mlsgalerkin.dynamics.Solver.end_step` (forces, final kick);
-4. every monitor's :meth:`~mlsgalerkin.monitors.Monitor.handle` with the :class:`RunState`.
+4. every interaction's :meth:`~mlsgalerkin.dynamics.Interaction.after_step` (forces a solver
+   computed in its ``end_step``, for the other body's next step);
+5. every monitor's :meth:`~mlsgalerkin.monitors.Monitor.handle` with the :class:`RunState`.
 
 ``summary.json`` is written at the end of **every** run that has an output directory —
 completed, paused at ``max_steps``, stopped by the watchdog (with its diagnosis), interrupted,
@@ -225,6 +227,8 @@ class Simulation:
                 i.exchange(t + dt, self._solver_of[i.first], self._solver_of[i.second])
         for s in self.solvers:
             s.end_step(t, dt)
+        for i in self.scene.interactions:
+            i.after_step(t + dt, self._solver_of[i.first], self._solver_of[i.second])
         st.t = t + dt
         st.step += 1
         st.dt = dt

@@ -85,18 +85,23 @@ def test_bad_input():
 
 def test_wet_surface_is_oriented_out_of_the_body_and_follows_the_displacement():
     """scikit-fem sorts facet vertices; each segment is re-oriented from its owning element so
-    that the contact normal points out of the body (on a rectangle: left, right, up, down)."""
+    that the contact normal points out of the body (on a rectangle: left, right, up, down); a Q2
+    facet is two segments through its mid-side node."""
     b = cantilever(8, 2, "Q2")
-    surf, vertices = b.surface()
+    surf = b.surface()
     centroids = surf.centroids()
     n = surf.normals()
     outward = np.where(np.isclose(centroids[:, 0], 0.0)[:, None], [-1.0, 0.0],
                        np.where(np.isclose(centroids[:, 0], 1.0)[:, None], [1.0, 0.0],
                                 np.where(np.isclose(centroids[:, 1], 0.0)[:, None], [0.0, -1.0], [0.0, 1.0])))
     np.testing.assert_allclose(n, outward, atol=1e-12)
-    assert surf.n_facets == 2 * (8 + 2)
-    top, top_vertices = b.surface(lambda x: np.isclose(x[1], 0.1))
-    assert top.n_facets == 8 and np.allclose(top.normals(), [0.0, 1.0])
-    b.u[b.basis.nodal_dofs[1]] = -0.01                      # every node 1 cm down
-    moved, _ = b.surface(lambda x: np.isclose(x[1], 0.1))
+    assert surf.n_facets == 2 * 2 * (8 + 2)
+    assert surf.n_nodes == 2 * 2 * (8 + 2)                    # a closed chain: as many nodes as segments
+    top = b.surface(lambda x: np.isclose(x[1], 0.1))
+    assert top.n_facets == 16 and top.n_nodes == 17 and np.allclose(top.normals(), [0.0, 1.0])
+    b.u[b.basis.nodal_dofs[1]] = -0.01                      # every vertex 1 cm down
+    b.u[b.basis.facet_dofs[1]] = -0.01                      # and every mid-side node
+    moved = b.surface(lambda x: np.isclose(x[1], 0.1))
     np.testing.assert_allclose(moved.nodes - top.nodes, [[0.0, -0.01]] * top.n_nodes)
+    q1 = cantilever(8, 2, "Q1").surface(lambda x: np.isclose(x[1], 0.1))
+    assert q1.n_facets == 8 and q1.n_nodes == 9

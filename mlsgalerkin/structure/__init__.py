@@ -1,15 +1,22 @@
-"""Structures loaded by the fluid: elastic bodies on scikit-fem (work in progress, issue 11).
+"""Structures loaded by the fluid: elastic bodies on scikit-fem and rigid bodies.
 
-=========================================  ================================================
-module                                     contents
-=========================================  ================================================
-:mod:`~mlsgalerkin.structure.elastic`      :class:`ElasticMaterial`, :class:`ElasticBody`:
-                                           small-strain elasticity on a scikit-fem mesh,
-                                           lumped mass, clamped facets, static solve and
-                                           explicit central differences
-=========================================  ================================================
+=============================================  ================================================
+module                                         contents
+=============================================  ================================================
+:mod:`~mlsgalerkin.structure.elastic`          :class:`ElasticMaterial`, :class:`ElasticBody`:
+                                               a scikit-fem mesh and element, stiffness, lumped
+                                               mass, clamped facets, weight, the wet surface
+:mod:`~mlsgalerkin.structure.rigid`            :class:`RigidBody`, :class:`Hinge`: mass,
+                                               inertia, constraints, a surface of segments
+:mod:`~mlsgalerkin.structure.explicit`         sub-cycled central differences in one numba
+                                               call (and its numpy reference)
+:mod:`~mlsgalerkin.structure.integrators`      how each body advances over an outer step
+                                               (explicit, Newmark, rigid Verlet), energies
+:mod:`~mlsgalerkin.structure.solver`           :class:`StructureSolver` in the run loop
+=============================================  ================================================
 """
 
 from mlsgalerkin.structure.elastic import ElasticBody, ElasticMaterial
+from mlsgalerkin.structure.rigid import Hinge, RigidBody
 
-__all__ = ["ElasticBody", "ElasticMaterial"]
+__all__ = ["ElasticBody", "ElasticMaterial", "Hinge", "RigidBody"]

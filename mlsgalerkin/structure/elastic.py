@@ -1,45 +1,65 @@
-r"""Small-strain elastic bodies on scikit-fem: stiffness, lumped mass, clamped facets, a static
-solve and the explicit central-difference step.
+r"""Elastic bodies on scikit-fem: stiffness, lumped mass, clamped facets, the wet surface, and the
+body's options in a run (model, integrator, weight, damping, named points).
 
 The body is a scikit-fem mesh with a vector element (Q1, 9-node Q2 or P1 in 2D). scikit-fem
 assembles everything once:
 
 .. math:: K = \int_\Omega \boldsymbol\varepsilon(\mathbf v) : \mathbb C : \boldsymbol\varepsilon(\mathbf u)\,d\Omega,
-          \qquad m_i = \sum_j \int_\Omega \rho_s\,\phi_i\cdot\phi_j\,d\Omega
+          \qquad m_i = \sum_j \int_\Omega \rho_s\,\phi_i\cdot\phi_j\,d\Omega,
+          \qquad \mathbf f_g = \int_\Omega \rho_s\,\mathbf g\cdot\phi_i\,d\Omega
 
 (``skfem.models.elasticity.linear_elasticity`` with the Lamé parameters; the row-sum lumped mass,
-positive for Q1, 9-node Q2 and P1, not for serendipity elements). In plane stress the first Lamé
-parameter is replaced by :math:`2\lambda\mu/(\lambda + 2\mu)`. Clamped degrees of freedom come
-from a facet predicate (``basis.get_dofs``). Explicit central differences,
+positive for Q1, 9-node Q2 and P1, not for serendipity elements; the weight ``f_g`` if the body
+has ``gravity``). In plane stress the first Lamé parameter is replaced by
+:math:`2\lambda\mu/(\lambda + 2\mu)`. Clamped degrees of freedom come from a facet predicate
+(``basis.get_dofs``). Units: m, kg, s, N (per unit depth in 2D), Pa.
 
-.. math:: \mathbf v^{n+1/2} = \mathbf v^{n-1/2} + \Delta t\,M^{-1}(\mathbf f_{ext} - K\mathbf u^n),
-          \qquad \mathbf u^{n+1} = \mathbf u^n + \Delta t\,\mathbf v^{n+1/2},
+A run advances the body with the :class:`~mlsgalerkin.structure.solver.StructureSolver`:
+explicit central differences sub-cycled inside the fluid's step (linear or a total-Lagrangian
+nonlinear model, :mod:`mlsgalerkin.structure.hyperelastic`), or implicit Newmark (linear). The
+fluid touches the body on its *wet surface*: the boundary facets chosen by ``wet``, as straight
+segments between the facet's nodes (vertices, and the mid-side node of a Q2 facet), oriented
+from the owning element (scikit-fem sorts facet nodes) so that the normal points out of the
+body.
 
-are stable for :math:`\Delta t < 2/\omega_{max}`, with :math:`\omega_{max}^2` the largest
-eigenvalue of :math:`M^{-1}K` (:meth:`ElasticBody.stable_time_step`).
+>>> from skfem import MeshQuad
+>>> mesh = MeshQuad.init_tensor(np.linspace(0, 0.3, 7), np.linspace(0, 0.006, 2))
+>>> beam = ElasticBody("beam", mesh, ElasticMaterial(0.2e9, 0.3, 7860.0, plane="stress"),
+...                    clamped=lambda x: np.isclose(x[0], 0.0), wet=lambda x: np.isclose(x[1], 0.006))
+>>> beam.wet.n_nodes, beam.wet.segments.shape   # 7 vertices and 6 mid-side nodes on the top
+(13, (12, 2))
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, ClassVar
 
 import numpy as np
 import scipy.sparse as sp
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from skfem import Basis, BilinearForm, ElementQuad1, ElementQuad2, ElementTriP1, ElementVector, FacetBasis, Mesh, asm
 from skfem import LinearForm, condense, solve
 from skfem.helpers import dot
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 
 from mlsgalerkin.contact import ContactSurface
+from mlsgalerkin.dynamics import Body
 
-__all__ = ["ElasticMaterial", "ElasticBody", "ELEMENTS"]
+__all__ = ["ELEMENTS", "INTEGRATORS", "MODELS", "ElasticBody", "ElasticMaterial", "WetSurface", "STRUCTURE_SOLVER"]
 
 FloatArray = NDArray[np.float64]
+Predicate = Callable[[FloatArray], FloatArray]
 
+#: The solver of structure bodies (a string: the body module does not import its solver).
+STRUCTURE_SOLVER = "mlsgalerkin.structure.solver:StructureSolver"
 #: The 2D elements with a positive row-sum lumped mass, by name.
 ELEMENTS = {"Q1": ElementQuad1, "Q2": ElementQuad2, "P1": ElementTriP1}
+#: Material models: small-strain linear elasticity and two total-Lagrangian hyperelastic models.
+MODELS = ("linear", "stvenant_kirchhoff", "neo_hookean")
+#: Time integrators: explicit central differences (sub-cycled) and implicit Newmark (linear only).
+INTEGRATORS = ("explicit", "newmark")
 
 
 @dataclass(frozen=True)
@@ -68,17 +88,132 @@ class ElasticMaterial:
             lam = 2.0 * lam * mu / (lam + 2.0 * mu)
         return lam, mu
 
+    def wave_speed(self) -> float:
+        """Dilatational wave speed ``sqrt((λ + 2μ)/ρ)`` (m/s) of the 2D model."""
+        lam, mu = self.lame()
+        return math.sqrt((lam + 2.0 * mu) / self.density)
 
-class ElasticBody:
-    """A small-strain elastic body on the scikit-fem ``mesh`` (2D) with element ``element``
-    (``"Q1"``, ``"Q2"`` or ``"P1"``), clamped where ``clamped(x)`` is true on the boundary
-    facets (``x`` of shape ``(2, n)``)."""
+
+@dataclass(frozen=True, eq=False)
+class WetSurface:
+    """The wet surface of an elastic body in the reference configuration.
+
+    Attributes
+    ----------
+    dofs : (m, 2) int array
+        The two vector degrees of freedom of each surface node.
+    reference : (m, 2) float array
+        Node positions at rest (m).
+    segments : (k, 2) int array
+        Surface node indices of each segment, ordered so that the normal (the segment direction
+        turned clockwise) points out of the body.
+    """
+
+    dofs: NDArray[np.int64]
+    reference: FloatArray
+    segments: NDArray[np.int64]
+
+    @property
+    def n_nodes(self) -> int:
+        return self.dofs.shape[0]
+
+    def contact_surface(self, u: FloatArray | None = None) -> ContactSurface:
+        """The surface as a :class:`~mlsgalerkin.contact.ContactSurface`, displaced by ``u (N,)``."""
+        x = self.reference if u is None else self.reference + u[self.dofs]
+        return ContactSurface(x, self.segments)
+
+
+def wet_surface(basis: Basis, facets: NDArray[np.int64]) -> WetSurface:
+    """The oriented segments of the boundary ``facets`` of a 2D vector ``basis`` (vertices, and
+    the mid-side node of a quadratic facet; see :class:`WetSurface`)."""
+    mesh = basis.mesh
+    ends = mesh.facets[:, facets].T.copy()                       # (k, 2) sorted vertex pairs
+    owner = mesh.f2t[0, facets]
+    centre = mesh.p[:, mesh.t[:, owner]].mean(axis=1).T          # (k, 2) owning element centroids
+    a, b = mesh.p[:, ends[:, 0]].T, mesh.p[:, ends[:, 1]].T
+    t = b - a
+    normal = np.stack([t[:, 1], -t[:, 0]], axis=1)
+    flip = np.einsum("kd,kd->k", normal, 0.5 * (a + b) - centre) < 0
+    ends[flip] = ends[flip][:, ::-1]
+    first = basis.nodal_dofs[:, ends[:, 0]].T                     # (k, 2) dofs of the start vertex
+    last = basis.nodal_dofs[:, ends[:, 1]].T
+    if basis.facet_dofs.shape[1]:                                 # quadratic: split at the mid-side node
+        mid = basis.facet_dofs[:2, facets].T
+        chain = np.stack([first, mid, last], axis=1)              # (k, 3, 2)
+        pairs = np.concatenate([chain[:, [0, 1]], chain[:, [1, 2]]], axis=0)
+    else:
+        pairs = np.stack([first, last], axis=1)                   # (k, 2, 2)
+    node_dof = pairs[:, :, 0].ravel()
+    unique, local = np.unique(node_dof, return_inverse=True)
+    dofs = np.stack([unique, unique + 1], axis=1) if np.all(basis.nodal_dofs[1] == basis.nodal_dofs[0] + 1) else None
+    if dofs is None:  # pragma: no cover - scikit-fem interleaves the components of ElementVector
+        raise RuntimeError("unexpected scikit-fem DOF layout: the vector components are not interleaved")
+    reference = basis.doflocs[:, unique].T.copy()
+    return WetSurface(dofs.astype(np.int64), reference, local.reshape(-1, 2).astype(np.int64))
+
+
+class ElasticBody(Body):
+    """An elastic body on the scikit-fem ``mesh`` (2D) with element ``element`` (``"Q1"``,
+    ``"Q2"`` or ``"P1"``).
+
+    Parameters
+    ----------
+    name : str
+    mesh : skfem.Mesh
+        A 2D mesh (``MeshQuad`` for Q1/Q2, ``MeshTri`` for P1), in m, at rest.
+    material : ElasticMaterial
+    element : str
+    clamped : callable, optional
+        ``clamped(x) -> bool array`` on facet midpoints ``x (2, n)``: the boundary facets whose
+        degrees of freedom are held at zero.
+    wet : callable, optional
+        The boundary facets the fluid may touch (same form); default all boundary facets.
+    model : str
+        ``"linear"`` (small strain), ``"stvenant_kirchhoff"`` or ``"neo_hookean"`` (total
+        Lagrangian, large rotations; plane strain, explicit only).
+    integrator : str
+        ``"explicit"`` (central differences, sub-cycled inside the outer step) or ``"newmark"``
+        (implicit average acceleration, linear model only; one step per outer step).
+    gravity : (2,) array, optional
+        Acceleration of gravity on the body (m/s²), e.g. ``(0, -9.81)``; none by default.
+    damping : (float, float)
+        Rayleigh damping ``C = a0 M + a1 K`` (1/s, s); none by default.
+    points : dict of str to (2,) point, optional
+        Named material points (m, at rest) whose displacement is recorded every step as the
+        time-series columns ``<name>_<point>_ux`` and ``_uy``.
+    """
+
+    solver: ClassVar[str] = STRUCTURE_SOLVER
 
     def __init__(self, name: str, mesh: Mesh, material: ElasticMaterial, element: str = "Q2",
-                 clamped: Callable[[FloatArray], FloatArray] | None = None) -> None:
+                 clamped: Predicate | None = None, wet: Predicate | None = None, *, model: str = "linear",
+                 integrator: str = "explicit", gravity: ArrayLike | None = None,
+                 damping: tuple[float, float] = (0.0, 0.0), points: dict[str, ArrayLike] | None = None) -> None:
+        owner = f"ElasticBody {name!r}"
         if element not in ELEMENTS:
-            raise ValueError(f"ElasticBody {name!r}: element must be one of {sorted(ELEMENTS)}, got {element!r}")
-        self.name, self.mesh, self.material = name, mesh, material
+            raise ValueError(f"{owner}: element must be one of {sorted(ELEMENTS)}, got {element!r}")
+        if not isinstance(mesh, Mesh) or mesh.p.shape[0] != 2:
+            raise ValueError(f"{owner}: mesh must be a 2D scikit-fem mesh (MeshQuad, MeshTri), got {type(mesh).__name__}")
+        if not isinstance(material, ElasticMaterial):
+            raise ValueError(f"{owner}: material must be an ElasticMaterial, got {type(material).__name__}")
+        if model not in MODELS:
+            raise ValueError(f"{owner}: model must be one of {MODELS}, got {model!r}")
+        if integrator not in INTEGRATORS:
+            raise ValueError(f"{owner}: integrator must be one of {INTEGRATORS}, got {integrator!r}")
+        if model != "linear" and integrator != "explicit":
+            raise ValueError(f"{owner}: the nonlinear model {model!r} runs with the explicit integrator only; "
+                             "use integrator='explicit' (or model='linear' for Newmark)")
+        if model != "linear" and material.plane != "strain":
+            raise ValueError(f"{owner}: the nonlinear model {model!r} is plane strain; use ElasticMaterial(..., "
+                             "plane='strain') (plane stress needs the thickness change, which it does not model)")
+        a0, a1 = (float(c) for c in damping)
+        if not (math.isfinite(a0) and math.isfinite(a1) and a0 >= 0 and a1 >= 0):
+            raise ValueError(f"{owner}: Rayleigh damping (a0, a1) must be finite and >= 0, got {damping!r}")
+        self.name, self.mesh, self.material, self.element = name, mesh, material, element
+        self.model, self.integrator, self.damping = model, integrator, (a0, a1)
+        self.gravity = None if gravity is None else np.asarray(gravity, dtype=float)
+        if self.gravity is not None and self.gravity.shape != (2,):
+            raise ValueError(f"{owner}: gravity must be a (2,) vector (m/s²), got shape {self.gravity.shape}")
         self.basis = Basis(mesh, ElementVector(ELEMENTS[element]()))
         lam, mu = material.lame()
         self.stiffness = asm(linear_elasticity(lam, mu), self.basis).tocsr()
@@ -90,16 +225,60 @@ class ElasticBody:
 
         self.lumped_mass = np.asarray(asm(mass, self.basis).sum(axis=1)).ravel()
         if np.any(self.lumped_mass <= 0):
-            raise ValueError(f"ElasticBody {name!r}: the row-sum lumped mass is not positive for element {element!r}")
+            raise ValueError(f"{owner}: the row-sum lumped mass is not positive for element {element!r}")
         n = self.basis.N
         self.clamped_dofs = (self.basis.get_dofs(clamped).all() if clamped is not None
                              else np.empty(0, dtype=np.int64))
         self.free = np.setdiff1d(np.arange(n), self.clamped_dofs)
+        chosen = (mesh.boundary_facets() if wet is None
+                  else mesh.facets_satisfying(wet, boundaries_only=True))
+        if len(chosen) == 0:
+            raise ValueError(f"{owner}: the wet predicate selects no boundary facet; it is called with facet "
+                             "midpoints x of shape (2, n) and must be true on the facets the fluid may touch")
+        self.wet = wet_surface(self.basis, np.asarray(chosen, dtype=np.int64))
+        self.weight = np.zeros(n)
+        if self.gravity is not None:
+            g = self.gravity
+
+            @LinearForm
+            def body_force(v, w):
+                return rho * (g[0] * v[0] + g[1] * v[1])
+
+            self.weight = asm(body_force, self.basis)
+        self.points: dict[str, FloatArray] = {}
+        for key, p in (points or {}).items():
+            q = np.asarray(p, dtype=float)
+            if q.shape != (2,) or not np.all(np.isfinite(q)):
+                raise ValueError(f"{owner}: point {key!r} must be a finite (2,) position, got {p!r}")
+            self.points[key] = q
+        self._probes = None
+        if self.points:
+            try:
+                self._probes = self.basis.probes(np.array(list(self.points.values())).T)
+            except Exception as exc:
+                raise ValueError(f"{owner}: a named point lies outside the mesh ({exc}); give points inside the "
+                                 "body at rest") from exc
         self.u = np.zeros(n)
-        self.v = np.zeros(n)   # at the half step (central differences)
+        self.v = np.zeros(n)
+
+    @property
+    def dim(self) -> int:
+        return 2
+
+    @property
+    def n_dofs(self) -> int:
+        return self.basis.N
+
+    def __repr__(self) -> str:
+        m = self.material
+        return (f"ElasticBody(name={self.name!r}, nodes={self.mesh.p.shape[1]}, elements={self.mesh.t.shape[1]}, "
+                f"element={self.element!r}, young={m.young!r}, poisson={m.poisson!r}, density={m.density!r}, "
+                f"plane={m.plane!r}, model={self.model!r}, integrator={self.integrator!r}, "
+                f"clamped_dofs={self.clamped_dofs.size}, wet_nodes={self.wet.n_nodes}, "
+                f"gravity={None if self.gravity is None else self.gravity.tolist()}, damping={self.damping!r})")
 
     # ------------------------------------------------------------------ loads
-    def edge_traction(self, facets: Callable[[FloatArray], FloatArray], traction: tuple[float, float]) -> FloatArray:
+    def edge_traction(self, facets: Predicate, traction: tuple[float, float]) -> FloatArray:
         """Nodal forces ``(N,)`` of a uniform traction ``traction`` (Pa) on the boundary facets
         where ``facets(x)`` is true: ``f_i = ∫ t · φ_i ds``."""
         fb = FacetBasis(self.mesh, self.basis.elem, facets=self.mesh.facets_satisfying(facets, boundaries_only=True))
@@ -111,7 +290,7 @@ class ElasticBody:
 
         return asm(load, fb)
 
-    # ------------------------------------------------------------------ solves
+    # ------------------------------------------------------------------ solves and probes
     def static(self, f: FloatArray) -> FloatArray:
         """The displacement ``(N,)`` (m) of ``K u = f`` with the clamped degrees of freedom at zero."""
         return solve(*condense(self.stiffness, f, D=self.clamped_dofs))
@@ -122,31 +301,25 @@ class ElasticBody:
         P = self.basis.probes(np.asarray(points, dtype=float))
         return (P @ u).reshape(2, -1).T
 
+    def point_displacements(self, u: FloatArray) -> dict[str, FloatArray]:
+        """Displacement ``(2,)`` (m) of each named point."""
+        if self._probes is None:
+            return {}
+        d = (self._probes @ u).reshape(2, -1)
+        return {k: d[:, i] for i, k in enumerate(self.points)}
+
     def vertex_displacement(self, vertices: NDArray[np.int64], u: FloatArray | None = None) -> FloatArray:
         """Displacement ``(k, 2)`` (m) of the mesh vertices ``vertices`` (their nodal degrees of freedom)."""
         u = self.u if u is None else u
         return u[self.basis.nodal_dofs[:, vertices]].T
 
-    def surface(self, facets: Callable[[FloatArray], FloatArray] | None = None,
-                u: FloatArray | None = None) -> tuple[ContactSurface, NDArray[np.int64]]:
-        """The wet surface in the current configuration: the boundary facets where ``facets(x)``
-        is true (all boundary facets if ``None``) as a :class:`~mlsgalerkin.contact.ContactSurface`
-        of straight segments between the facets' vertices, each oriented from its owning element
-        (scikit-fem sorts facet nodes) so that the normal points out of the body; and the mesh
-        vertex of each surface node ``(m,)``."""
+    def surface(self, facets: Predicate | None = None, u: FloatArray | None = None) -> ContactSurface:
+        """The boundary facets where ``facets(x)`` is true (all if ``None``) in the configuration
+        displaced by ``u`` (default ``self.u``), as an oriented
+        :class:`~mlsgalerkin.contact.ContactSurface` (normals out of the body)."""
         mesh = self.mesh
         chosen = mesh.boundary_facets() if facets is None else mesh.facets_satisfying(facets, boundaries_only=True)
-        ends = mesh.facets[:, chosen].T.copy()                      # (k, 2) sorted vertex pairs
-        owner = mesh.f2t[0, chosen]
-        centre = mesh.p[:, mesh.t[:, owner]].mean(axis=1).T         # (k, 2) owning element centroids
-        a, b = mesh.p[:, ends[:, 0]].T, mesh.p[:, ends[:, 1]].T
-        t = b - a
-        normal = np.stack([t[:, 1], -t[:, 0]], axis=1)
-        flip = np.einsum("kd,kd->k", normal, 0.5 * (a + b) - centre) < 0
-        ends[flip] = ends[flip][:, ::-1]
-        vertices, local = np.unique(ends, return_inverse=True)
-        nodes = mesh.p[:, vertices].T + self.vertex_displacement(vertices, u)
-        return ContactSurface(nodes, local.reshape(-1, 2)), vertices
+        return wet_surface(self.basis, np.asarray(chosen, dtype=np.int64)).contact_surface(self.u if u is None else u)
 
     def internal_force(self, u: FloatArray | None = None) -> FloatArray:
         """``K u`` ``(N,)`` in N (per unit depth), zero on the clamped degrees of freedom."""
@@ -154,19 +327,25 @@ class ElasticBody:
         f[self.clamped_dofs] = 0.0
         return f
 
-    def stable_time_step(self) -> float:
-        """``2/ω_max`` (s) of central differences, ``ω_max²`` the largest eigenvalue of
-        ``M⁻¹K`` over the free degrees of freedom (scipy ``eigsh``)."""
+    def highest_frequency(self) -> float:
+        """``ω_max`` (rad/s): the square root of the largest eigenvalue of ``M⁻¹K`` over the free
+        degrees of freedom (scipy ``eigsh``)."""
         from scipy.sparse.linalg import eigsh
 
         free = self.free
         s = 1.0 / np.sqrt(self.lumped_mass[free])
         A = sp.diags(s) @ self.stiffness[free][:, free] @ sp.diags(s)
         lam = eigsh(A, k=1, which="LA", return_eigenvectors=False, tol=1e-6)[0]
-        return 2.0 / float(np.sqrt(lam))
+        return float(np.sqrt(lam))
+
+    def stable_time_step(self) -> float:
+        """``2/ω_max`` (s), the stability limit of undamped central differences."""
+        return 2.0 / self.highest_frequency()
 
     def step(self, dt: float, f_ext: FloatArray | None = None) -> None:
-        """One central-difference step of ``dt`` (s) under external nodal forces ``f_ext`` (N)."""
+        """One central-difference step of ``dt`` (s) under external nodal forces ``f_ext`` (N), on
+        ``self.u`` and the half-step velocity ``self.v`` (a standalone integrator for tests and
+        scripts; a run uses :class:`~mlsgalerkin.structure.solver.StructureSolver`)."""
         f = -self.internal_force()
         if f_ext is not None:
             f = f + f_ext

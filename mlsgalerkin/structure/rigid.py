@@ -1,0 +1,183 @@
+r"""Rigid bodies in 2D: mass, inertia, a constraint, and a surface of segments the fluid touches.
+
+A rigid body moves its surface nodes :math:`\mathbf X_a` (at rest) with the translation of its
+centre of mass :math:`\mathbf c` and a rotation :math:`\theta` about it:
+
+.. math:: \mathbf x_a = \mathbf c + R(\theta)(\mathbf X_a - \mathbf c_0),\qquad
+          \mathbf v_a = \mathbf V + \omega\,\mathbf e_z\times\mathbf r_a,\qquad
+          \mathbf a_a = \mathbf A + \dot\omega\,\mathbf e_z\times\mathbf r_a - \omega^2\mathbf r_a .
+
+Forces :math:`\mathbf f_a` on the surface nodes (from contact and the fluid's wall particles)
+give the resultant :math:`\mathbf F = \sum_a \mathbf f_a` and moment
+:math:`M = \sum_a (\mathbf x_a - \mathbf p)\times\mathbf f_a` about a point :math:`\mathbf p`.
+The equations of motion by constraint (units: kg, kg m², N, N m, per unit depth in 2D):
+
+- ``"free"``: :math:`m\dot{\mathbf V} = \mathbf F + m\mathbf g`, :math:`I_c\dot\omega = M_c`;
+- ``"vertical"`` (heave only, the rigid wedge of Zhao, Faltinsen & Aarsnes 1996):
+  :math:`m\dot V_y = F_y + m g_y`, no rotation, no horizontal motion;
+- ``"fixed"``: the body does not move (a wall whose load is recorded);
+- :class:`Hinge` (rotation about a fixed point :math:`\mathbf p` with a rotational spring
+  :math:`K` and damper :math:`C`, the spring-supported beam of Sun 2016):
+  :math:`I_p\ddot\theta = M_p + (\mathbf c - \mathbf p)\times m\mathbf g - K\theta - C\dot\theta`,
+  :math:`I_p = I_c + m|\mathbf c_0 - \mathbf p|^2`.
+
+For a uniform beam of length :math:`L` and mass :math:`m` standing on its hinge,
+:math:`(\mathbf c - \mathbf p)\times m\mathbf g = \tfrac12 mgL\sin\theta`, and the dry natural
+frequency is :math:`\omega_n^2 = (K - mgL/2)/I_p` (0.1879 s for :math:`L = 2` m,
+:math:`m = 1` kg, :math:`K = 1500` N m/rad; Sun 2016).
+
+>>> beam = RigidBody.beam("beam", base=(3.22, 0.0), length=2.0, mass=1.0, thickness=0.02,
+...                       constraint=Hinge((3.22, 0.0), stiffness=1500.0), gravity=(0.0, -9.81))
+>>> round(beam.natural_period(), 4)
+0.1879
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from mlsgalerkin.contact import ContactSurface
+from mlsgalerkin.dynamics import Body
+from mlsgalerkin.structure.elastic import STRUCTURE_SOLVER
+
+__all__ = ["CONSTRAINTS", "Hinge", "RigidBody"]
+
+FloatArray = NDArray[np.float64]
+
+#: The named constraints of a rigid body (a :class:`Hinge` is the fourth kind).
+CONSTRAINTS = ("free", "vertical", "fixed")
+
+
+@dataclass(frozen=True)
+class Hinge:
+    """Rotation about the fixed ``point`` (m) with a rotational spring ``stiffness`` (N m/rad, per
+    unit depth in 2D) and damper ``damping`` (N m s/rad); the angle is zero at rest."""
+
+    point: tuple[float, float]
+    stiffness: float = 0.0
+    damping: float = 0.0
+
+    def __post_init__(self) -> None:
+        p = np.asarray(self.point, dtype=float)
+        if p.shape != (2,) or not np.all(np.isfinite(p)):
+            raise ValueError(f"Hinge: point must be a finite (2,) position, got {self.point!r}")
+        if not (math.isfinite(self.stiffness) and self.stiffness >= 0):
+            raise ValueError(f"Hinge: stiffness must be finite and >= 0 (N m/rad), got {self.stiffness!r}")
+        if not (math.isfinite(self.damping) and self.damping >= 0):
+            raise ValueError(f"Hinge: damping must be finite and >= 0 (N m s/rad), got {self.damping!r}")
+
+
+@dataclass
+class RigidBody(Body):
+    """A rigid body in 2D (module docstring).
+
+    Parameters
+    ----------
+    name : str
+    surface : ContactSurface
+        The surface the fluid may touch, at rest, normals out of the body.
+    mass : float
+        kg (per unit depth in 2D).
+    inertia : float
+        Moment of inertia about the centre of mass (kg m², per unit depth).
+    centre : (2,) point
+        Centre of mass at rest (m).
+    constraint : str or Hinge
+        ``"free"``, ``"vertical"``, ``"fixed"`` or a :class:`Hinge`.
+    velocity : (2,) m/s and angular_velocity : rad/s
+        Initial velocity of the centre of mass and initial rate of rotation.
+    gravity : (2,) m/s², optional
+        Acceleration of gravity on the body; none by default.
+    """
+
+    solver: ClassVar[str] = STRUCTURE_SOLVER
+    name: str
+    surface: ContactSurface
+    mass: float
+    inertia: float
+    centre: FloatArray
+    constraint: str | Hinge = "free"
+    velocity: FloatArray = field(default_factory=lambda: np.zeros(2))
+    angular_velocity: float = 0.0
+    gravity: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        owner = f"RigidBody {self.name!r}"
+        if not isinstance(self.surface, ContactSurface) or self.surface.dim != 2:
+            raise ValueError(f"{owner}: surface must be a 2D mlsgalerkin.contact.ContactSurface (normals out of the "
+                             f"body), got {type(self.surface).__name__}")
+        if not (isinstance(self.mass, (int, float)) and math.isfinite(self.mass) and self.mass > 0):
+            raise ValueError(f"{owner}: mass must be positive (kg per unit depth), got {self.mass!r}")
+        if not (isinstance(self.inertia, (int, float)) and math.isfinite(self.inertia) and self.inertia > 0):
+            raise ValueError(f"{owner}: inertia must be positive (kg m² about the centre of mass), got {self.inertia!r}")
+        self.centre = self._vector(owner, "centre", self.centre)
+        self.velocity = self._vector(owner, "velocity", self.velocity)
+        if not math.isfinite(self.angular_velocity):
+            raise ValueError(f"{owner}: angular_velocity must be finite, got {self.angular_velocity!r}")
+        if self.gravity is not None:
+            self.gravity = self._vector(owner, "gravity", self.gravity)
+        if not (isinstance(self.constraint, Hinge) or self.constraint in CONSTRAINTS):
+            raise ValueError(f"{owner}: constraint must be one of {CONSTRAINTS} or a Hinge(point, stiffness), got "
+                             f"{self.constraint!r}")
+        if self.constraint == "vertical" and (self.velocity[0] != 0 or self.angular_velocity != 0):
+            raise ValueError(f"{owner}: a body constrained to vertical motion starts with no horizontal velocity "
+                             "and no rotation")
+        if self.constraint == "fixed" and (np.any(self.velocity != 0) or self.angular_velocity != 0):
+            raise ValueError(f"{owner}: a fixed body has no initial velocity")
+        if isinstance(self.constraint, Hinge) and np.any(self.velocity != 0):
+            raise ValueError(f"{owner}: a hinged body starts with angular_velocity only (velocity must be zero)")
+        if isinstance(self.constraint, Hinge) and self.natural_frequency_squared() <= 0 and self.constraint.stiffness > 0:
+            raise ValueError(f"{owner}: the hinge spring ({self.constraint.stiffness:g} N m/rad) does not hold the body "
+                             "up against gravity (K < m g |c - p|): stiffen the spring")
+
+    @staticmethod
+    def _vector(owner: str, what: str, value: ArrayLike) -> FloatArray:
+        v = np.asarray(value, dtype=float)
+        if v.shape != (2,) or not np.all(np.isfinite(v)):
+            raise ValueError(f"{owner}: {what} must be a finite (2,) vector, got {value!r}")
+        return v
+
+    @property
+    def dim(self) -> int:
+        return 2
+
+    # ------------------------------------------------------------------ derived
+    def hinge_inertia(self) -> float:
+        """``I_p = I_c + m |c0 − p|²`` (kg m²) about the hinge (a :class:`Hinge` body)."""
+        p = np.asarray(self.constraint.point, dtype=float)
+        return self.inertia + self.mass * float(np.sum((self.centre - p) ** 2))
+
+    def natural_frequency_squared(self) -> float:
+        """``(K − m g·(c0 − p) stiffening)/I_p`` (rad²/s²) of small dry oscillations about a hinge:
+        ``ω² = (K + m g·(c0 − p))/I_p`` (gravity pointing down lowers it for a body above its
+        hinge)."""
+        h = self.constraint
+        p = np.asarray(h.point, dtype=float)
+        g = np.zeros(2) if self.gravity is None else self.gravity
+        return (h.stiffness + self.mass * float(g @ (self.centre - p))) / self.hinge_inertia()
+
+    def natural_period(self) -> float:
+        """Dry natural period ``2π/ω_n`` (s) of a hinged body."""
+        if not isinstance(self.constraint, Hinge):
+            raise ValueError(f"RigidBody {self.name!r}: only a hinged body has a natural period")
+        return 2.0 * math.pi / math.sqrt(self.natural_frequency_squared())
+
+    # ------------------------------------------------------------------ builders
+    @classmethod
+    def beam(cls, name: str, base: ArrayLike, length: float, mass: float, thickness: float,
+             constraint: str | Hinge = "free", gravity: ArrayLike | None = None, angle: float = 0.0) -> "RigidBody":
+        """A uniform rectangular beam standing on ``base`` (m) at ``angle`` from the vertical
+        (rad, counter-clockwise), ``length × thickness`` (m); inertia ``m(L² + t²)/12`` about
+        its centre; the surface is its outline (normals out of the beam)."""
+        b = np.asarray(base, dtype=float)
+        axis = np.array([-math.sin(angle), math.cos(angle)])
+        side = np.array([axis[1], -axis[0]]) * 0.5 * thickness
+        corners = [b - side, b + side, b + side + length * axis, b - side + length * axis]
+        surface = ContactSurface(np.array(corners), np.array([[0, 1], [1, 2], [2, 3], [3, 0]]))
+        return cls(name, surface, mass, mass * (length**2 + thickness**2) / 12.0, b + 0.5 * length * axis,
+                   constraint=constraint, gravity=None if gravity is None else np.asarray(gravity, dtype=float))
