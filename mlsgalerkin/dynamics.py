@@ -182,7 +182,8 @@ class Interaction(ABC):
         """Called once more after every solver's :meth:`Solver.end_step` at time ``t``: for
         forces that only exist once a solver has evaluated its own (the reaction of the fluid on
         wall particles riding on a structure), added to the other body for its next step. The
-        surface forces are cleared before the next :meth:`exchange`, not before this call."""
+        surface forces are cleared before the next :meth:`exchange`, not before this call. Also
+        called once after every solver's :meth:`Solver.start`, at the initial time."""
 
     def stable_time_step(self) -> float:
         """Largest stable time step this interaction allows (s); ``inf`` if none."""

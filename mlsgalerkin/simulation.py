@@ -203,9 +203,13 @@ class Simulation:
 
     # ------------------------------------------------------------------ stepping
     def start(self) -> None:
-        """First force evaluation of every solver at the initial time."""
+        """First force evaluation of every solver at the initial time, then every interaction's
+        :meth:`~mlsgalerkin.dynamics.Interaction.after_step` (forces the solvers' first
+        evaluation produced, for the other body's first step)."""
         for s in self.solvers:
             s.start()
+        for i in self.scene.interactions:
+            i.after_step(self.state.t, self._solver_of[i.first], self._solver_of[i.second])
         self.started = True
 
     def time_step(self) -> float:

@@ -24,10 +24,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import scipy.sparse as sp
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["ContactSurface"]
+__all__ = ["ContactSurface", "SurfacePoints", "surface_chains", "surface_points"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,3 +192,113 @@ def _measures(x: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.float6
     if x.shape[1] == 2:
         return np.linalg.norm(x[f[:, 1]] - x[f[:, 0]], axis=1)
     return 0.5 * np.linalg.norm(np.cross(x[f[:, 1]] - x[f[:, 0]], x[f[:, 2]] - x[f[:, 0]]), axis=1)
+
+
+def surface_chains(segments: NDArray[np.int64]) -> list[NDArray[np.int64]]:
+    """The segments of an oriented 2D surface grouped into chains, each in walking order (a
+    segment's second node is the next one's first): open chains from their free start, then
+    closed loops (started at their lowest segment)."""
+    outgoing = {int(a): i for i, a in enumerate(segments[:, 0])}
+    has_incoming = {int(b) for b in segments[:, 1]}
+    seen = np.zeros(segments.shape[0], dtype=bool)
+    chains = []
+    starts = [i for i, a in enumerate(segments[:, 0]) if int(a) not in has_incoming]
+    for first in starts + list(range(segments.shape[0])):
+        if seen[first]:
+            continue
+        chain, i = [], first
+        while i is not None and not seen[i]:
+            seen[i] = True
+            chain.append(i)
+            i = outgoing.get(int(segments[i, 1]))
+        chains.append(np.array(chain, dtype=np.int64))
+    return chains
+
+
+@dataclass(frozen=True, eq=False)
+class SurfacePoints:
+    """Points spread evenly along a 2D surface, each standing for a piece of it.
+
+    Attributes
+    ----------
+    segment, xi : (n,) arrays
+        The segment each point lies on and its position along it (0 at the first node).
+    width : (n,) array
+        The length of surface each point stands for (m): its *footprint*, centred on it.
+    average, start, end : (n, m) sparse matrices
+        Linear maps from node values ``(m, ·)`` to the mean over each footprint and to the
+        values at its two ends (the surface's piecewise-linear interpolation along its chain).
+    """
+
+    segment: NDArray[np.int64]
+    xi: NDArray[np.float64]
+    width: NDArray[np.float64]
+    average: sp.csr_matrix
+    start: sp.csr_matrix
+    end: sp.csr_matrix
+
+    def kinematics(self, x: NDArray[np.float64], v: NDArray[np.float64]
+                   ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Footprint-mean position and velocity ``(n, 2)`` of the surface with node positions
+        ``x`` and velocities ``v``, the unit normal of each footprint's chord (the chord from its
+        start to its end turned clockwise) and that normal's rate of change ``(n, 2)``."""
+        chord = self.end @ x - self.start @ x
+        dchord = self.end @ v - self.start @ v
+        length = np.sqrt(np.einsum("ij,ij->i", chord, chord))[:, None]
+        n = np.stack([chord[:, 1], -chord[:, 0]], axis=1) / length
+        dn = np.stack([dchord[:, 1], -dchord[:, 0]], axis=1) / length
+        dn -= np.einsum("ij,ij->i", dn, n)[:, None] * n
+        return self.average @ x, self.average @ v, n, dn
+
+
+def surface_points(surface: ContactSurface, spacing: float) -> SurfacePoints:
+    """Points along each chain of the 2D ``surface`` (total length ``S``): ``k = max(1,
+    round(S/spacing))`` of them at arc lengths ``(j + ½) S/k``, each with the footprint
+    ``[s − S/2k, s + S/2k]`` (see :class:`SurfacePoints`)."""
+    if surface.dim != 2:
+        raise ValueError("surface_points: the surface must be 2D")
+    nodes, segs = surface.nodes, surface.facets
+    lengths = surface.measures()
+    seg_l, xi_l, w_l = [], [], []
+    rows_a, rows_s, rows_e = [], [], []          # (point, node, weight) triplets
+    count = 0
+    for chain in surface_chains(segs):
+        chain_nodes = np.concatenate([segs[chain, 0], segs[chain[-1:], 1]])
+        cum = np.concatenate([[0.0], np.cumsum(lengths[chain])])
+        total = cum[-1]
+        k = max(1, int(round(total / spacing)))
+        width = total / k
+        arc = (np.arange(k) + 0.5) * width
+        j = np.clip(np.searchsorted(cum, arc, side="right") - 1, 0, len(chain) - 1)
+        seg_l.append(chain[j])
+        xi_l.append((arc - cum[j]) / lengths[chain[j]])
+        w_l.append(np.full(k, width))
+
+        def at(s: float) -> list[tuple[int, float]]:
+            i = int(np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(chain) - 1))
+            f = (s - cum[i]) / (cum[i + 1] - cum[i])
+            return [(chain_nodes[i], 1.0 - f), (chain_nodes[i + 1], f)]
+
+        for q in range(k):
+            a, b = arc[q] - 0.5 * width, arc[q] + 0.5 * width
+            p = count + q
+            rows_s += [(p, n_, w_) for n_, w_ in at(a)]
+            rows_e += [(p, n_, w_) for n_, w_ in at(b)]
+            for i in range(len(chain)):                  # mean of the hat functions over [a, b]
+                lo, hi = max(a, cum[i]), min(b, cum[i + 1])
+                if hi <= lo:
+                    continue
+                ell = cum[i + 1] - cum[i]
+                # ∫ (cum[i+1] − s)/ℓ ds and ∫ (s − cum[i])/ℓ ds over [lo, hi]
+                right = ((hi - cum[i]) ** 2 - (lo - cum[i]) ** 2) / (2.0 * ell)
+                left = (hi - lo) - right
+                rows_a += [(p, chain_nodes[i], left / width), (p, chain_nodes[i + 1], right / width)]
+        count += k
+    shape = (count, nodes.shape[0])
+
+    def matrix(rows: list) -> sp.csr_matrix:
+        r, c, w = (np.array(v) for v in zip(*rows))
+        return sp.csr_matrix((w.astype(float), (r.astype(np.int64), c.astype(np.int64))), shape=shape)
+
+    return SurfacePoints(np.concatenate(seg_l), np.concatenate(xi_l), np.concatenate(w_l), matrix(rows_a),
+                         matrix(rows_s), matrix(rows_e))

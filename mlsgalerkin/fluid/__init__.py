@@ -45,6 +45,7 @@ from mlsgalerkin.fluid.bodies import (
     wall_box,
 )
 from mlsgalerkin.fluid.consistent_integration import ConsistentIntegration
+from mlsgalerkin.fluid.coupling import StructureCoupling
 from mlsgalerkin.fluid.density_diffusion import DensityDiffusion
 from mlsgalerkin.fluid.effect import Effect
 from mlsgalerkin.fluid.eos import (
@@ -80,6 +81,7 @@ from mlsgalerkin.fluid.viscosity import BulkViscosity, NewtonianViscosity
 from mlsgalerkin.fluid.walls import Walls
 
 __all__ = [
+    "StructureCoupling",
     "BulkViscosity",
     "ConsistentIntegration",
     "DensityDiffusion",

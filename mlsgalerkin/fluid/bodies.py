@@ -26,7 +26,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mlsgalerkin.contact.surface import ContactSurface
+from mlsgalerkin.contact.surface import ContactSurface, SurfacePoints, surface_points
 from mlsgalerkin.dynamics import Body
 from mlsgalerkin.motion import Motion
 from mlsgalerkin.neighbors import as_coordinates
@@ -216,6 +216,18 @@ class WallBody(Body):
         A penalty contact surface of the wall (normals toward the fluid), in the reference
         configuration of ``motion``. Used by the ``PenaltyWalls`` effect, which must then be
         listed (:mod:`mlsgalerkin.fluid.penalty_walls`).
+    follows : str, optional
+        The name of another body (a structure) whose surface carries these wall particles: an
+        interaction (:class:`~mlsgalerkin.fluid.coupling.StructureCoupling`) sets their
+        positions, velocities, accelerations and normals every step. Built by
+        :meth:`on_surface`, which also sets ``anchors``.
+    anchors : (n, 4) array, optional
+        For a wall that ``follows`` a surface: the segment of the surface each particle rides on,
+        its position ``ξ`` along it (0 at the segment's first node, 1 at the second), its depth
+        behind the surface (m) and the index of its point in ``footprints``.
+    footprints : :class:`~mlsgalerkin.contact.surface.SurfacePoints`, optional
+        The points along the surface the layers of particles stand on, each with the piece of
+        surface it represents (the maps from the surface's nodes to the particles).
     """
 
     solver: ClassVar[str] = FLUID_SOLVER
@@ -227,6 +239,9 @@ class WallBody(Body):
     motion: Motion | None = None
     reference_density: float = 1000.0
     surface: ContactSurface | None = None
+    follows: str | None = None
+    anchors: NDArray[np.float64] | None = None
+    footprints: SurfacePoints | None = None
 
     def __post_init__(self) -> None:
         if self.surface is not None and not isinstance(self.surface, ContactSurface):
@@ -267,6 +282,51 @@ class WallBody(Body):
                 raise ValueError(f"wall body {self.name!r}: give either a surface velocity (a wall that "
                                  "stays in place) or a motion, not both")
         self.velocity = v
+        if self.follows is not None:
+            if self.motion is not None or self.surface is not None:
+                raise ValueError(f"wall body {self.name!r}: a wall that follows the surface of {self.follows!r} moves "
+                                 "with it; give it no motion and no penalty surface of its own (the coupling's "
+                                 "contact uses the structure's surface)")
+            anchors = None if self.anchors is None else np.asarray(self.anchors, dtype=float)
+            if anchors is None or anchors.shape != (n, 4) or self.normals is None or self.footprints is None:
+                raise ValueError(f"wall body {self.name!r}: a wall that follows a surface needs anchors (n, 4), "
+                                 "footprints and normals; build it with WallBody.on_surface(...)")
+            self.anchors = anchors
+
+    @classmethod
+    def on_surface(cls, name: str, surface: ContactSurface, spacing: float, follows: str, layers: int = 3,
+                   reference_density: float = 1000.0) -> "WallBody":
+        """Wall particles riding on the 2D ``surface`` of the body ``follows`` (its surface at
+        rest, normals out of that body, into the fluid): along each chain of connected segments
+        of total length ``S``, ``k = max(1, round(S/spacing))`` points at arc lengths
+        ``(j + ½) S/k`` (:func:`~mlsgalerkin.contact.surface.surface_points`), each standing for
+        ``S/k`` of surface; a particle sits at the mean of its piece, ``(l + ½) spacing`` behind it
+        along the normal of the piece's chord, for ``layers`` layers ``l``.
+
+        >>> plate = ContactSurface.polyline([(1.0, 0.0), (0.0, 0.0)])     # normal up
+        >>> w = WallBody.on_surface("plate_walls", plate, 0.25, follows="plate", layers=2)
+        >>> w.n, w.positions[:2].tolist(), w.normals[0].tolist()
+        (8, [[0.875, -0.125], [0.625, -0.125]], [0.0, 1.0])
+        """
+        if not isinstance(surface, ContactSurface) or surface.dim != 2:
+            raise ValueError(f"wall body {name!r}: on_surface needs a 2D ContactSurface")
+        if not (isinstance(spacing, (int, float)) and math.isfinite(spacing) and spacing > 0):
+            raise ValueError(f"wall body {name!r}: spacing must be positive (m), got {spacing!r}")
+        if not (isinstance(layers, int) and layers >= 1):
+            raise ValueError(f"wall body {name!r}: layers must be a positive integer, got {layers!r}")
+        total = float(surface.measures().sum())
+        _check_limit((total / spacing + surface.n_facets) * layers, f"wall particles on a surface ({surface.n_facets} "
+                     "segments", spacing)
+        pts = surface_points(surface, spacing)
+        k = pts.segment.size
+        x0, _, n0, _ = pts.kinematics(surface.nodes, np.zeros_like(surface.nodes))
+        depth = np.repeat((np.arange(layers) + 0.5) * spacing, k)
+        anchors = np.column_stack([np.tile(pts.segment, layers), np.tile(pts.xi, layers), depth,
+                                   np.tile(np.arange(k), layers)]).astype(float)
+        nrm = np.tile(n0, (layers, 1))
+        x = np.tile(x0, (layers, 1)) - depth[:, None] * nrm
+        return cls(name, np.ascontiguousarray(x), spacing, normals=np.ascontiguousarray(nrm),
+                   reference_density=reference_density, follows=follows, anchors=anchors, footprints=pts)
 
     @property
     def n(self) -> int:

@@ -9,9 +9,9 @@ does both, for a fluid on its own.
 
 ``"kdk"`` — :class:`KickDriftKick` (default, one evaluation per step)
     ``v += ½Δt a``; ``ρ += ½Δt ρ̇(x^n, v^½)`` (old table, new velocity); drift-stage effects
-    (particle shifting, ``x += δr``); ``x += Δt v``; walls to
-    ``t + Δt``; kinematics at ``x^{n+1}``; ``ρ += ½Δt ρ̇(x^{n+1}, v^½)`` | dynamics;
-    ``v += ½Δt a``. Velocity and density form a staggered leapfrog pair, stable for
+    (particle shifting, ``x += δr``); ``x += Δt v``; walls to ``t + Δt`` | kinematics at
+    ``x^{n+1}`` (after the exchange, so walls riding on a structure are where it put them);
+    ``ρ += ½Δt ρ̇(x^{n+1}, v^½)``; dynamics; ``v += ½Δt a``. Velocity and density form a staggered leapfrog pair, stable for
     ``ω Δt < 2``. (Advancing ``ρ`` with the rate of the *previous* half step instead has
     amplification ``det = 1 + (ωΔt)²/2`` per step: unconditionally unstable.)
 ``"predictor_corrector"`` — :class:`PredictorCorrector` (explicit midpoint, two evaluations)
@@ -79,12 +79,14 @@ class KickDriftKick(Integrator):
         s.x[f] += dt * s.v[f]
         solver.move_walls(t + dt)
         solver.timer.add("integrate", t0)
-        solver.kinematics()
-        s.rho[f] += 0.5 * dt * s.drho[f]
 
     def end(self, solver: "FluidSolver", t: float, dt: float) -> None:
         s = solver.state
         f = s.fluid
+        # kinematics here, after the exchange: walls riding on a structure are where the
+        # structure put them at t + dt (the exchange sets them), not where they were predicted
+        solver.kinematics()
+        s.rho[f] += 0.5 * dt * s.drho[f]
         solver.dynamics()
         t0 = time.perf_counter()
         s.v[f] += 0.5 * dt * s.a[f]

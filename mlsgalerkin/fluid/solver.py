@@ -206,6 +206,10 @@ class FluidSolver(Solver):
                 out.append(f"{e!r} reads {missing}, which no listed effect provides")
         if any(isinstance(b, WallBody) and b.n for b in bodies) and "wall_state" not in provided:
             out.append("the scene has wall bodies but no wall treatment: list Walls()")
+        for w in (b for b in bodies if isinstance(b, WallBody) and b.follows is not None):
+            if not any(getattr(i, "walls", None) == w.name for i in scene.interactions):
+                out.append(f"wall body {w.name!r} follows {w.follows!r} but no interaction moves it: list "
+                           f"StructureCoupling(..., walls={w.name!r}) in the scene's interactions")
         unused = [b.name for b in bodies if isinstance(b, WallBody) and b.surface is not None]
         if unused and "wall_surface_contact" not in provided:
             out.append(f"wall bodies {unused} have a penalty surface but no listed effect uses it: list PenaltyWalls() "
@@ -260,12 +264,23 @@ class FluidSolver(Solver):
                 wsl = slice(sl.start - s.n_fluid, sl.stop - s.n_fluid)
                 n0 = w.normals if w.normals is not None else np.zeros_like(w.positions)
                 self._moving.append((sl, wsl, w.motion, w.positions.copy(), np.asarray(n0, dtype=float).copy()))
+        # walls riding on another body's surface (set by an interaction every step):
+        # name -> (rows in the state, rows among the walls); their last driven state
+        # (time, positions, velocities, accelerations) predicts them between exchanges
+        self._driven: dict[str, tuple[slice, slice]] = {}
+        for w in self.walls:
+            if w.follows is not None and w.n:
+                sl = s.bodies[w.name]
+                self._driven[w.name] = (sl, slice(sl.start - s.n_fluid, sl.stop - s.n_fluid))
+        self._drive: dict[str, list] = {}
         # wall penetration is measured where every wall body has normals (its surface is known)
         self._offsets = None
         particle_walls = [w for w in self.walls if w.n]
         if particle_walls and all(w.normals is not None for w in particle_walls):
-            self._offsets = np.concatenate([surface_offsets(w.positions, np.asarray(w.normals, dtype=float), w.spacing)
-                                            for w in particle_walls])
+            self._offsets = np.concatenate([
+                w.anchors[:, 2].copy() if w.anchors is not None
+                else surface_offsets(w.positions, np.asarray(w.normals, dtype=float), w.spacing)
+                for w in particle_walls])
         self.penetration = {"max_depth_dx": 0.0, "max_count": 0, "time_of_max_depth_s": None, "warned": False}
         for e in self.effects:
             e.setup(s, scene)
@@ -293,12 +308,45 @@ class FluidSolver(Solver):
             surf = s.wall_surfaces[name]
             surf.x = np.ascontiguousarray(motion.positions(x0, t))
             surf.v = np.ascontiguousarray(motion.velocities(x0, t))
+        for name, (sl, wsl) in self._driven.items():
+            if name not in self._drive:
+                continue
+            t0, x0, v0, a0 = self._drive[name]
+            tau = t - t0
+            s.x[sl] = x0 + tau * v0 + 0.5 * tau * tau * a0
+            s.wall_velocity[wsl] = v0 + tau * a0
+            s.wall_acceleration[wsl] = a0
+
+    def drive_walls(self, body: str, t: float, positions: np.ndarray, velocities: np.ndarray,
+                    accelerations: np.ndarray, normals: np.ndarray) -> None:
+        """Set the wall particles of ``body`` (a wall that ``follows`` another body) to their
+        state at time ``t``: positions (m), velocities (m/s), accelerations (m/s², seen by the
+        wall pressure) and normals, each ``(n, d)``. Until the next call, :meth:`move_walls`
+        predicts them as ``x + τv + ½τ²a``, ``v + τa`` (``τ`` the time since ``t``)."""
+        if body not in self._driven:
+            raise ValueError(f"fluid solver: {body!r} is not a wall body that follows a surface")
+        s = self._state
+        sl, wsl = self._driven[body]
+        s.x[sl] = positions
+        s.wall_velocity[wsl] = velocities
+        s.wall_acceleration[wsl] = accelerations
+        s.wall_normals[wsl] = normals
+        self._drive[body] = [float(t), np.array(positions, dtype=float), np.array(velocities, dtype=float),
+                             np.array(accelerations, dtype=float)]
+
+    def wall_reactions(self, body: str) -> np.ndarray:
+        """The nodal force of the fluid's last evaluation on the wall particles of ``body``,
+        ``f_w = −Σ_k σ_k ∇N_w(x_k) V_k`` (N, per unit depth in 2D; ``(n, d)``): the force the fluid
+        exerts on them (the Galerkin sums over all nodes add to zero, so this is minus what the
+        wall gives the fluid through the nodal integration)."""
+        s = self._state
+        return s.force[s.bodies[body]].copy()
 
     def _neighbors(self) -> None:
         s = self._state
         t0 = time.perf_counter()
         if s.neighbors is not None:
-            rows = slice(0, s.n) if self._moving else s.fluid
+            rows = slice(0, s.n) if (self._moving or self._driven) else s.fluid
             disp = s.x[rows] - s.x_ref[rows]
             moved = float(np.sqrt(np.max(np.einsum("ij,ij->i", disp, disp)))) if disp.shape[0] else 0.0
             if moved <= 0.5 * self.approximation.skin * s.spacing:
@@ -530,6 +578,10 @@ class FluidSolver(Solver):
             arrays["table_volumes"] = self._table_volumes.copy()
         if self._external is not None:  # the last exchange's forces (the next midpoint evaluation uses them)
             arrays["surface_forces"] = self._external.copy()
+        for name, (t_d, x_d, v_d, a_d) in self._drive.items():  # walls riding on a structure
+            arrays[f"drive__{name}"] = np.concatenate([x_d, v_d, a_d], axis=1)
+            arrays[f"drive_normals__{name}"] = s.wall_normals[self._driven[name][1]].copy()
+            arrays[f"drive_time__{name}"] = np.array([t_d])
         if s.L is not None:  # the last evaluation's velocity gradient (particle shifting re-interpolates with it)
             arrays["velocity_gradient"] = s.L.copy()
         if self._continuity_added is not None:  # the added continuity terms the next half update reuses
@@ -579,6 +631,14 @@ class FluidSolver(Solver):
         s.sensors.update(meta.get("sensors", {}))
         # wall velocities, accelerations and normals, and the penalty surfaces, of the
         # checkpoint's time (the particle positions are in the checkpoint)
+        self._drive = {}
+        for name, (sl, wsl) in self._driven.items():
+            if f"drive__{name}" in arrays:
+                xva = arrays[f"drive__{name}"]
+                d = s.dim
+                self._drive[name] = [float(arrays[f"drive_time__{name}"][0]), xva[:, :d].copy(),
+                                     xva[:, d:2 * d].copy(), xva[:, 2 * d:].copy()]
+                s.wall_normals[wsl] = arrays[f"drive_normals__{name}"]
         x_walls = s.x.copy()
         self.move_walls(s.t)
         s.x[:] = x_walls

@@ -47,8 +47,10 @@ from mlsgalerkin.io.files import atomic_write
 from mlsgalerkin.io.render_fields import FieldStyle, resolve_field
 
 __all__ = [
+    "STRUCTURE_COLOR",
     "WALL_COLOR",
     "Frame",
+    "with_structure",
     "FrameView",
     "figure_png",
     "figure_rgb",
@@ -65,6 +67,8 @@ Frame = tuple[float, np.ndarray, Mapping[str, np.ndarray]]
 
 #: Colour of the wall particles (never colour-mapped).
 WALL_COLOR = "0.62"
+#: Colour of a structure's nodes (``is_structure`` points; never colour-mapped).
+STRUCTURE_COLOR = "#3a2e8c"
 #: Colour of fluid particles whose value is not finite.
 _BAD_COLOR = "black"
 
@@ -124,6 +128,24 @@ def time_text(t: float) -> str:
     if t != 0.0 and abs(t) < 0.01:
         return f"t = {t:.3g} s"
     return f"t = {t:.4f} s"
+
+
+def with_structure(frame: Frame, points: np.ndarray) -> Frame:
+    """``frame`` with a structure's node ``points`` appended: flagged ``is_structure`` and
+    ``is_wall`` (drawn in :data:`STRUCTURE_COLOR`, never colour-mapped), every other field padded
+    with NaN (zero for integer fields)."""
+    t, pts, data = frame
+    spts = np.asarray(points, dtype=float)[:, : pts.shape[1]]
+    n, m = len(pts), len(spts)
+    merged: dict[str, np.ndarray] = {}
+    for key, value in data.items():
+        v = np.asarray(value)
+        pad = np.zeros((m, *v.shape[1:]), dtype=v.dtype) if v.dtype.kind in "iub" else np.full((m, *v.shape[1:]), np.nan)
+        merged[key] = np.concatenate([v, pad.astype(v.dtype) if v.dtype.kind in "iub" else pad])
+    merged["is_wall"] = np.concatenate([np.asarray(data.get("is_wall", np.zeros(n)), dtype=np.int32).reshape(-1),
+                                        np.ones(m, dtype=np.int32)])
+    merged["is_structure"] = np.concatenate([np.zeros(n, dtype=np.int32), np.ones(m, dtype=np.int32)])
+    return t, np.concatenate([pts, spts]), merged
 
 
 def _wall_mask(data: Mapping[str, np.ndarray], n: int) -> np.ndarray:
@@ -328,11 +350,17 @@ def _draw(ax, view: FrameView, frame: Frame, disc: float, palette, title: str) -
     values, _ = resolve_field(data, view.field, view.dim)
     wall = _wall_mask(data, len(pts))
     fluid = ~wall
+    flag = data.get("is_structure")
+    structure = np.zeros(len(pts), dtype=bool) if flag is None else np.asarray(flag).reshape(-1).astype(bool)
+    wall &= ~structure
     coords = (lambda sel: (pts[sel, 0], pts[sel, 1])) if view.flat else \
         (lambda sel: (pts[sel, 0], pts[sel, 1], pts[sel, 2]))
     if wall.any():
         ax.scatter(*coords(wall), s=(0.7 * disc) ** 2, color=WALL_COLOR, linewidths=0, zorder=1,
                    label="wall particles")
+    if structure.any():
+        ax.scatter(*coords(structure), s=(0.45 * disc) ** 2, color=STRUCTURE_COLOR, linewidths=0, zorder=3,
+                   label="structure")
     mappable = None
     if fluid.any():
         v = values[fluid]

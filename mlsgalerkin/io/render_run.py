@@ -35,13 +35,15 @@ from pathlib import Path
 import numpy as np
 
 from mlsgalerkin.io.render_fields import resolve_field
-from mlsgalerkin.io.render_frames import Frame, figure_png, frame_figure, frame_view, write_gif
+from mlsgalerkin.io.render_frames import Frame, figure_png, frame_figure, frame_view, with_structure, write_gif
 
 __all__ = ["RenderError", "RunContents", "inspect_run", "read_frames", "render_frame", "render_run"]
 
 logger = logging.getLogger(__name__)
 
 FRAMES_FILE = "particles.pvd"
+#: The frames of a run's structures, drawn with the particles when present.
+STRUCTURE_FILE = "structure.pvd"
 TIMESERIES_FILE = "timeseries.csv"
 
 
@@ -134,13 +136,28 @@ def _dim(points: np.ndarray) -> int:
 
 
 def read_frames(listed: Sequence[tuple[float, Path]]) -> list[Frame]:
-    """``(time, points, point_data)`` of each ``(time, path)``; 2D series come back ``(n, 2)``."""
-    from mlsgalerkin.io.vtk import read_vtu
+    """``(time, points, point_data)`` of each ``(time, path)``; 2D series come back ``(n, 2)``.
+    A run with structures (``structure.pvd`` beside the particle frames) gets the structure's
+    nodes of the same time added to each frame (:func:`~mlsgalerkin.io.render_frames.with_structure`)."""
+    from mlsgalerkin.io.vtk import read_pvd, read_vtu
 
+    structure: list[tuple[float, Path]] = []
+    if listed:
+        spvd = Path(listed[0][1]).parent / STRUCTURE_FILE
+        if spvd.is_file():
+            try:
+                structure = [(t, p) for t, p in read_pvd(spvd) if p.is_file()]
+            except ValueError as exc:
+                logger.warning("could not read %s (%s); drawing the particles alone", spvd, exc)
     out = []
     for t, path in listed:
         points, data = read_vtu(path)
-        out.append((float(t), points[:, :2] if _dim(points) == 2 else points, data))
+        frame = (float(t), points[:, :2] if _dim(points) == 2 else points, data)
+        match = [p for ts, p in structure if abs(ts - t) <= 1e-9 * max(1.0, abs(t))]
+        if match:
+            spoints, _ = read_vtu(match[0])
+            frame = with_structure(frame, spoints)
+        out.append(frame)
     return out
 
 

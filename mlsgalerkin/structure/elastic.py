@@ -33,21 +33,34 @@ body.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, ClassVar
+from typing import ClassVar
 
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
-from skfem import Basis, BilinearForm, ElementQuad1, ElementQuad2, ElementTriP1, ElementVector, FacetBasis, Mesh, asm
-from skfem import LinearForm, condense, solve
+from skfem import (
+    Basis,
+    BilinearForm,
+    ElementQuad1,
+    ElementQuad2,
+    ElementTriP1,
+    ElementVector,
+    FacetBasis,
+    LinearForm,
+    Mesh,
+    asm,
+    condense,
+    solve,
+)
 from skfem.helpers import dot
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.dynamics import Body
 
-__all__ = ["ELEMENTS", "INTEGRATORS", "MODELS", "ElasticBody", "ElasticMaterial", "WetSurface", "STRUCTURE_SOLVER"]
+__all__ = ["ELEMENTS", "INTEGRATORS", "MODELS", "STRUCTURE_SOLVER", "ElasticBody", "ElasticMaterial", "WetSurface"]
 
 FloatArray = NDArray[np.float64]
 Predicate = Callable[[FloatArray], FloatArray]
@@ -178,6 +191,11 @@ class ElasticBody(Body):
         Acceleration of gravity on the body (m/s²), e.g. ``(0, -9.81)``; none by default.
     damping : (float, float)
         Rayleigh damping ``C = a0 M + a1 K`` (1/s, s); none by default.
+    high_mode_damping : float
+        Explicit integrator: stiffness-proportional damping added so that the highest mode has
+        this damping ratio (``a1 = 2ξ/ω_max``; default 0.5). It keeps the stiff modes a coupled
+        run cannot resolve from ringing at the wet surface (measured necessary on the plate under
+        water); its damping ratio at the first mode, ``ξ ω₁/ω_max``, is in ``summary.json``.
     points : dict of str to (2,) point, optional
         Named material points (m, at rest) whose displacement is recorded every step as the
         time-series columns ``<name>_<point>_ux`` and ``_uy``.
@@ -188,14 +206,15 @@ class ElasticBody(Body):
     def __init__(self, name: str, mesh: Mesh, material: ElasticMaterial, element: str = "Q2",
                  clamped: Predicate | None = None, wet: Predicate | None = None, *, model: str = "linear",
                  integrator: str = "explicit", gravity: ArrayLike | None = None,
-                 damping: tuple[float, float] = (0.0, 0.0), points: dict[str, ArrayLike] | None = None) -> None:
+                 damping: tuple[float, float] = (0.0, 0.0), high_mode_damping: float = 0.5,
+                 points: dict[str, ArrayLike] | None = None) -> None:
         owner = f"ElasticBody {name!r}"
         if element not in ELEMENTS:
             raise ValueError(f"{owner}: element must be one of {sorted(ELEMENTS)}, got {element!r}")
         if not isinstance(mesh, Mesh) or mesh.p.shape[0] != 2:
             raise ValueError(f"{owner}: mesh must be a 2D scikit-fem mesh (MeshQuad, MeshTri), got {type(mesh).__name__}")
         if not isinstance(material, ElasticMaterial):
-            raise ValueError(f"{owner}: material must be an ElasticMaterial, got {type(material).__name__}")
+            raise TypeError(f"{owner}: material must be an ElasticMaterial, got {type(material).__name__}")
         if model not in MODELS:
             raise ValueError(f"{owner}: model must be one of {MODELS}, got {model!r}")
         if integrator not in INTEGRATORS:
@@ -206,6 +225,10 @@ class ElasticBody(Body):
         if model != "linear" and material.plane != "strain":
             raise ValueError(f"{owner}: the nonlinear model {model!r} is plane strain; use ElasticMaterial(..., "
                              "plane='strain') (plane stress needs the thickness change, which it does not model)")
+        if not (isinstance(high_mode_damping, (int, float)) and 0.0 <= high_mode_damping <= 1.0):
+            raise ValueError(f"{owner}: high_mode_damping is a damping ratio at the highest mode, in [0, 1]; got "
+                             f"{high_mode_damping!r}")
+        self.high_mode_damping = float(high_mode_damping)
         a0, a1 = (float(c) for c in damping)
         if not (math.isfinite(a0) and math.isfinite(a1) and a0 >= 0 and a1 >= 0):
             raise ValueError(f"{owner}: Rayleigh damping (a0, a1) must be finite and >= 0, got {damping!r}")
@@ -275,7 +298,8 @@ class ElasticBody(Body):
                 f"element={self.element!r}, young={m.young!r}, poisson={m.poisson!r}, density={m.density!r}, "
                 f"plane={m.plane!r}, model={self.model!r}, integrator={self.integrator!r}, "
                 f"clamped_dofs={self.clamped_dofs.size}, wet_nodes={self.wet.n_nodes}, "
-                f"gravity={None if self.gravity is None else self.gravity.tolist()}, damping={self.damping!r})")
+                f"gravity={None if self.gravity is None else self.gravity.tolist()}, damping={self.damping!r}, "
+                f"high_mode_damping={self.high_mode_damping!r})")
 
     # ------------------------------------------------------------------ loads
     def edge_traction(self, facets: Predicate, traction: tuple[float, float]) -> FloatArray:
@@ -336,6 +360,17 @@ class ElasticBody(Body):
         s = 1.0 / np.sqrt(self.lumped_mass[free])
         A = sp.diags(s) @ self.stiffness[free][:, free] @ sp.diags(s)
         lam = eigsh(A, k=1, which="LA", return_eigenvectors=False, tol=1e-6)[0]
+        return float(np.sqrt(lam))
+
+    def lowest_frequency(self) -> float:
+        """``ω₁`` (rad/s) of the clamped body: the smallest eigenvalue of ``M⁻¹K`` over the free
+        degrees of freedom (``eigsh`` in shift-invert mode)."""
+        from scipy.sparse.linalg import eigsh
+
+        free = self.free
+        K = self.stiffness[free][:, free]
+        M = sp.diags(self.lumped_mass[free])
+        lam = eigsh(K, k=1, M=M, sigma=0.0, which="LM", return_eigenvectors=False)[0]
         return float(np.sqrt(lam))
 
     def stable_time_step(self) -> float:

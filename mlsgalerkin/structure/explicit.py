@@ -2,7 +2,8 @@ r"""Sub-cycled explicit central differences of a linear elastic body: one compil
 
 Inside one outer (fluid) step :math:`\Delta t` the structure takes :math:`n` sub-steps of
 :math:`\delta t = \Delta t/n` in velocity-Verlet form, with the external forces
-:math:`\mathbf f` (weight, contact and fluid loads of the last exchange) held constant:
+:math:`\mathbf f` (weight, contact and fluid loads) ramped linearly over the outer step,
+:math:`\mathbf f(t_k) = \mathbf f_0 + (k/n)\,\Delta\mathbf f`:
 
 .. math::
 
@@ -35,11 +36,12 @@ FloatArray = NDArray[np.float64]
 
 
 @numba.njit(cache=True)
-def _subcycle_linear(indptr, indices, data, inv_m, fixed, f, u, v, a, dt, n, a0, a1):  # pragma: no cover - compiled
+def _subcycle_linear(indptr, indices, data, inv_m, fixed, f0, df, u, v, a, dt, n, a0, a1):  # pragma: no cover
     N = u.shape[0]
     w = np.empty(N)
     h = 0.5 * dt
-    for _ in range(n):
+    for k in range(n):
+        ramp = (k + 1.0) / n
         for i in range(N):
             v[i] += h * a[i]
             u[i] += dt * v[i]
@@ -52,25 +54,28 @@ def _subcycle_linear(indptr, indices, data, inv_m, fixed, f, u, v, a, dt, n, a0,
             s = 0.0
             for k in range(indptr[i], indptr[i + 1]):
                 s += data[k] * w[indices[k]]
-            a[i] = (f[i] - s) * inv_m[i] - a0 * v[i]
+            a[i] = (f0[i] + ramp * df[i] - s) * inv_m[i] - a0 * v[i]
             v[i] += h * a[i]
 
 
-def subcycle_linear(K: sp.csr_matrix, inv_m: FloatArray, fixed: NDArray[np.bool_], f: FloatArray, u: FloatArray,
-                    v: FloatArray, a: FloatArray, dt: float, n: int, a0: float = 0.0, a1: float = 0.0) -> None:
+def subcycle_linear(K: sp.csr_matrix, inv_m: FloatArray, fixed: NDArray[np.bool_], f0: FloatArray, df: FloatArray,
+                    u: FloatArray, v: FloatArray, a: FloatArray, dt: float, n: int, a0: float = 0.0,
+                    a1: float = 0.0) -> None:
     """``n`` velocity-Verlet sub-steps of ``dt`` (s) in place on ``u, v, a (N,)`` (m, m/s, m/s²)
-    under the held forces ``f (N,)`` (N); ``K`` CSR (N/m), ``inv_m (N,)`` (1/kg), ``fixed (N,)``
-    the clamped degrees of freedom, Rayleigh ``a0`` (1/s), ``a1`` (s) (module docstring)."""
-    _subcycle_linear(K.indptr, K.indices, K.data, inv_m, fixed, f, u, v, a, float(dt), int(n), float(a0), float(a1))
+    under the forces ``f0 + (k/n) df`` (N) at the end of sub-step ``k`` (a ramp over the outer
+    step; ``a`` must hold the acceleration at its start); ``K`` CSR (N/m), ``inv_m (N,)`` (1/kg),
+    ``fixed (N,)`` the clamped degrees of freedom, Rayleigh ``a0`` (1/s), ``a1`` (s)."""
+    _subcycle_linear(K.indptr, K.indices, K.data, inv_m, fixed, f0, df, u, v, a, float(dt), int(n), float(a0),
+                     float(a1))
 
 
-def subcycle_linear_reference(K: sp.csr_matrix, inv_m: FloatArray, fixed: NDArray[np.bool_], f: FloatArray,
-                              u: FloatArray, v: FloatArray, a: FloatArray, dt: float, n: int, a0: float = 0.0,
-                              a1: float = 0.0) -> None:
+def subcycle_linear_reference(K: sp.csr_matrix, inv_m: FloatArray, fixed: NDArray[np.bool_], f0: FloatArray,
+                              df: FloatArray, u: FloatArray, v: FloatArray, a: FloatArray, dt: float, n: int,
+                              a0: float = 0.0, a1: float = 0.0) -> None:
     """The numpy/scipy version of :func:`subcycle_linear` (same arguments, in place)."""
-    for _ in range(n):
+    for k in range(n):
         v += 0.5 * dt * a
         u += dt * v
-        a[:] = (f - K @ (u + a1 * v)) * inv_m - a0 * v
+        a[:] = (f0 + (k + 1.0) / n * df - K @ (u + a1 * v)) * inv_m - a0 * v
         a[fixed] = 0.0
         v += 0.5 * dt * a

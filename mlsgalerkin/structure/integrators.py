@@ -1,28 +1,45 @@
-r"""How each kind of structure body advances over one outer step, with the surface forces held.
+r"""How each kind of structure body advances over one outer step.
+
+**Surface forces over a step.** The forces the interactions add at :math:`t_n` (contact, the
+fluid's reaction on the wall particles riding on the body) act over the outer step
+:math:`[t_n, t_{n+1}]` as a linear ramp from :math:`\mathbf f_n` to its extrapolation
+:math:`\mathbf f_n + (\Delta t_n/\Delta t_{n-1})(\mathbf f_n - \mathbf f_{n-1})`, so their mean
+over the step is the second-order estimate of :math:`\mathbf f(t_{n+1/2})`. Two simpler choices
+were measured unstable on the plate under a water column (``hydrostatic_plate``, 2 m of water on
+a 5 cm aluminium plate): holding :math:`\mathbf f_n` over the step (a lag of half a step; the
+plate gained energy at an e-fold every few milliseconds) and applying :math:`\mathbf f_n` as
+impulses at the step boundaries as the fluid's kick-drift-kick does (every impulse rings the
+plate's stiff through-thickness modes, which the fluid then sees). The wall pressure must also
+see the surface's acceleration (:class:`~mlsgalerkin.fluid.coupling.StructureCoupling`): without
+it the same plate diverged.
 
 :class:`ElasticMotion` advances an :class:`~mlsgalerkin.structure.elastic.ElasticBody`:
 
 - ``integrator="explicit"``: central differences (velocity Verlet) sub-cycled ``n`` times inside
   the outer step, ``n = ceil(Δt/(C·2/ω_max))`` with the safety ``C`` = :data:`SUBSTEP_SAFETY`
   (:mod:`mlsgalerkin.structure.explicit`; the nonlinear models evaluate the total-Lagrangian
-  internal force of :mod:`mlsgalerkin.structure.hyperelastic` at each sub-step);
+  internal force of :mod:`mlsgalerkin.structure.hyperelastic` at each sub-step). The
+  stiffness-proportional damping ``a1`` includes the body's ``high_mode_damping`` (a damping
+  ratio at ``ω_max``), which keeps the resolved but irrelevant stiff modes from ringing at the
+  surface the fluid sees; the damping ratio it implies at the first mode is reported.
 - ``integrator="newmark"``: one implicit average-acceleration Newmark step
   (:math:`\beta = 1/4, \gamma = 1/2`, unconditionally stable, no numerical damping),
 
-  .. math:: (M + \gamma\Delta t\,C + \beta\Delta t^2K)\,\mathbf a^{n+1} = \mathbf f
+  .. math:: (M + \gamma\Delta t\,C + \beta\Delta t^2K)\,\mathbf a^{n+1} = \mathbf f_g + \mathbf f^{n+1}
             - C(\mathbf v^n + (1-\gamma)\Delta t\,\mathbf a^n)
             - K(\mathbf u^n + \Delta t\,\mathbf v^n + (\tfrac12-\beta)\Delta t^2\mathbf a^n),
 
-  with the factorisation kept while the outer step does not change.
+  with :math:`\mathbf a^n` in equilibrium with the surface forces at :math:`t_n` and
+  :math:`\mathbf f^{n+1}` their extrapolation; the factorisation is kept while the step stays
+  within 1 % below the one it was made for (:data:`NEWMARK_REUSE`; ``β`` then lies in
+  ``[1/4, 0.255]``).
 
 :class:`RigidMotion` advances a :class:`~mlsgalerkin.structure.rigid.RigidBody` by velocity
 Verlet in its constrained coordinates, sub-cycled so that :math:`\omega_n\,\delta t \le 0.05`
-for a hinge spring.
+for a hinge spring, with the same ramp of the surface force and moment.
 
-The held force of an outer step is the weight plus what the interactions added at the last
-exchange (contact, the fluid's reaction on the wall particles riding on the body). Both keep the
-work done by those forces, :math:`W = \sum \mathbf f\cdot\Delta\mathbf u` over each outer step
-(exact for a force held constant), for the energy balance of a coupled run.
+Both keep the work of the surface forces (the ramp's mean force on the step's displacement of
+the surface nodes) for the energy balance of a coupled run.
 """
 
 from __future__ import annotations
@@ -41,13 +58,17 @@ from mlsgalerkin.structure.elastic import ElasticBody
 from mlsgalerkin.structure.explicit import subcycle_linear
 from mlsgalerkin.structure.rigid import Hinge, RigidBody
 
-__all__ = ["ElasticMotion", "RigidMotion", "SUBSTEP_SAFETY"]
+__all__ = ["SUBSTEP_SAFETY", "ElasticMotion", "RigidMotion"]
 
 FloatArray = NDArray[np.float64]
 
 #: Fraction of the central-difference limit ``2/ω_max`` a sub-step takes (linear; the nonlinear
 #: models take 0.8 of it, their tangent stiffens under stretch).
 SUBSTEP_SAFETY = 0.9
+#: A Newmark factorisation made for ``Δt'`` is reused for steps in ``[Δt'/NEWMARK_REUSE, Δt']``,
+#: and made for ``NEWMARK_MARGIN`` times the step that asks for a new one.
+NEWMARK_REUSE = 1.01
+NEWMARK_MARGIN = 1.005
 #: Largest ``ω δt`` of a rigid body's sub-steps on its hinge spring.
 RIGID_PHASE_PER_SUBSTEP = 0.05
 
@@ -72,6 +93,10 @@ class ElasticMotion:
         self.fixed[body.clamped_dofs] = True
         self.a0, self.a1 = body.damping
         self.omega_max = body.highest_frequency()
+        self.a1_high = 0.0
+        if body.integrator == "explicit" and body.high_mode_damping > 0:
+            self.a1_high = 2.0 * body.high_mode_damping / self.omega_max
+            self.a1 += self.a1_high
         # with stiffness-proportional damping the central-difference limit shrinks to
         # (2/ω)(sqrt(1 + ξ²) − ξ), ξ = a1 ω/2 + a0/(2ω) at the highest mode
         xi = 0.5 * (self.a1 * self.omega_max + self.a0 / self.omega_max)
@@ -81,13 +106,16 @@ class ElasticMotion:
         self.v = np.zeros(n)
         self.a = np.zeros(n)
         self.f = np.zeros(n)          # surface forces of the last exchange (N)
-        self.work = 0.0               # work of the held surface forces (J per unit depth)
+        self.f_last = np.zeros(n)     # the surface forces of the exchange before (N), for the extrapolation
+        self.dt_prev = 0.0            # the last outer step (s)
+        self.work = 0.0               # work of the surface forces (J per unit depth)
         self.substeps = 0
         self.outer_steps = 0
         self.max_substeps = 0
         self.seconds = 0.0
         self._lu: Any = None
-        self._lu_dt: float | None = None
+        self._lu_dt = 0.0
+        self.factorisations = 0
         self._internal = None
         if body.model != "linear":
             from mlsgalerkin.structure.hyperelastic import QuadratureData
@@ -105,55 +133,78 @@ class ElasticMotion:
         return internal_force(self._quadrature, u, *self._lame, self.body.model)
 
     def acceleration(self) -> FloatArray:
-        """``M⁻¹(f_g + f − f_int(u) − C v)`` with the clamped degrees of freedom at zero."""
+        """``M⁻¹(f_g − f_int(u) − C v)``, the body's own forces, with the clamped degrees of
+        freedom at zero."""
         b = self.body
-        a = (b.weight + self.f - self.internal_force(self.u) - self.a1 * (self.K @ self.v)) * self.inv_m - self.a0 * self.v
+        a = (b.weight - self.internal_force(self.u) - self.a1 * (self.K @ self.v)) * self.inv_m - self.a0 * self.v
         a[self.fixed] = 0.0
         return a
+
+    def load_ramp(self, dt: float) -> tuple[FloatArray, FloatArray]:
+        """The surface forces at the start of the outer step (those of the last exchange) and at
+        its end, extrapolated linearly from the exchange before (module docstring)."""
+        f0 = self.f.copy()
+        f0[self.fixed] = 0.0
+        f1 = f0 + (dt / self.dt_prev) * (f0 - self.f_last) if self.dt_prev > 0 else f0.copy()
+        self.f_last[:] = f0
+        self.dt_prev = dt
+        return f0, f1
 
     def start(self) -> None:
         self.a = self.acceleration()
 
     # ------------------------------------------------------------------ stepping
     def advance(self, dt: float) -> None:
-        """Advance ``u, v, a`` by the outer step ``dt`` (s) with the forces held."""
+        """``u, v, a`` over the outer step ``dt`` (s) under the body's own forces and the surface
+        forces ramped from the last exchange's to their extrapolation at the step's end."""
         t0 = time.perf_counter()
         b = self.body
-        u_start = self.u[self.body.wet.dofs].copy()
+        f0, f1 = self.load_ramp(dt)
+        wet = b.wet.dofs
+        u_start = self.u[wet].copy()
+        self.a = self.acceleration() + f0 * self.inv_m       # equilibrium at the step's start
         if b.integrator == "newmark":
-            self._newmark(dt)
+            self._newmark(dt, f1)
             n = 1
         else:
             n = max(1, math.ceil(dt / self.substep_limit * (1.0 - 1e-12)))
             h = dt / n
             if b.model == "linear":
-                subcycle_linear(self.K, self.inv_m, self.fixed, b.weight + self.f, self.u, self.v, self.a, h, n,
+                subcycle_linear(self.K, self.inv_m, self.fixed, b.weight + f0, f1 - f0, self.u, self.v, self.a, h, n,
                                 self.a0, self.a1)
             else:
-                for _ in range(n):
+                for k in range(n):
                     self.v += 0.5 * h * self.a
                     self.u += h * self.v
-                    self.a = self.acceleration()
+                    self.a = self.acceleration() + (f0 + (k + 1.0) / n * (f1 - f0)) * self.inv_m
                     self.v += 0.5 * h * self.a
-        du = self.u[b.wet.dofs] - u_start
-        self.work += float(np.sum(self.f[b.wet.dofs] * du))
+        self.work += 0.5 * float(np.sum((f0[wet] + f1[wet]) * (self.u[wet] - u_start)))
         self.substeps += n
         self.max_substeps = max(self.max_substeps, n)
         self.outer_steps += 1
         self.seconds += time.perf_counter() - t0
 
-    def _newmark(self, dt: float) -> None:
-        beta, gamma = 0.25, 0.5
+    def _newmark(self, dt: float, f1: FloatArray) -> None:
+        # the factorisation of M + γΔt'C + β'Δt'²K is kept while the step stays within 1 % below
+        # the Δt' it was made for; the step then uses β = β'(Δt'/Δt)² ∈ [1/4, 0.255] (γ = ½:
+        # still unconditionally stable and free of numerical damping) and the matching γΔt'C
+        gamma = 0.5
         free = self.body.free
-        if self._lu is None or self._lu_dt != dt:
+        if self._lu is None or not (self._lu_dt / NEWMARK_REUSE <= dt <= self._lu_dt):
+            lu_dt = dt * NEWMARK_MARGIN
             M = sp.diags(1.0 / self.inv_m)
             C = self.a0 * M + self.a1 * self.K
-            A = (M + gamma * dt * C + beta * dt * dt * self.K).tocsr()[free][:, free]
-            self._lu, self._lu_dt = splu(A.tocsc()), dt
+            A = (M + gamma * lu_dt * C + 0.25 * lu_dt * lu_dt * self.K).tocsr()[free][:, free]
+            self._lu, self._lu_dt = splu(A.tocsc()), lu_dt
+            self.factorisations += 1
+        beta = 0.25 * (self._lu_dt / dt) ** 2
+        if self.a0 or self.a1:  # damping: the matrix's γΔt'C must match the step's γΔt C
+            gamma = 0.5 * self._lu_dt / dt
         u, v, a = self.u, self.v, self.a
         u_pred = u + dt * v + (0.5 - beta) * dt * dt * a
         v_pred = v + (1.0 - gamma) * dt * a
-        rhs = self.body.weight + self.f - self.K @ u_pred - self.a1 * (self.K @ v_pred) - self.a0 * v_pred / self.inv_m
+        rhs = (self.body.weight + f1 - self.K @ u_pred - self.a1 * (self.K @ v_pred)
+               - self.a0 * v_pred / self.inv_m)
         a_new = np.zeros_like(a)
         a_new[free] = self._lu.solve(rhs[free])
         self.u = u_pred + beta * dt * dt * a_new
@@ -161,6 +212,10 @@ class ElasticMotion:
         self.a = a_new
 
     # ------------------------------------------------------------------ surface
+    @property
+    def n_surface(self) -> int:
+        return self.body.wet.n_nodes
+
     def surface(self) -> Surface:
         w = self.body.wet
         return Surface(self.body.name, w.reference + self.u[w.dofs], self.v[w.dofs].copy(),
@@ -187,8 +242,18 @@ class ElasticMotion:
         return {"kinetic_energy": kinetic, "strain_energy": strain,
                 "weight_potential": -float(b.weight @ self.u), "surface_work": self.work}
 
+    def first_mode_damping(self) -> float | None:
+        """Damping ratio ``a0/(2ω₁) + a1 ω₁/2`` of the body's lowest mode (``None`` without a
+        clamped boundary: the lowest mode is a rigid motion)."""
+        b = self.body
+        if b.clamped_dofs.size == 0:
+            return None
+        w1 = b.lowest_frequency()
+        return 0.5 * self.a0 / w1 + 0.5 * self.a1 * w1
+
     def observables(self) -> dict[str, float]:
         row = self.energies()
+        row["force_x"], row["force_y"] = float(self.f[0::2].sum()), float(self.f[1::2].sum())
         for key, d in self.body.point_displacements(self.u).items():
             row[f"{key}_ux"], row[f"{key}_uy"] = float(d[0]), float(d[1])
         return row
@@ -204,20 +269,26 @@ class ElasticMotion:
 
     def checkpoint(self) -> dict[str, FloatArray]:
         return {"u": self.u.copy(), "v": self.v.copy(), "a": self.a.copy(), "f": self.f.copy(),
-                "counters": np.array([self.work, self.substeps, self.outer_steps, self.max_substeps], dtype=float)}
+                "f_last": self.f_last.copy(),
+                "counters": np.array([self.work, self.substeps, self.outer_steps, self.max_substeps, self.dt_prev])}
 
     def restore(self, arrays: dict[str, FloatArray]) -> None:
-        self.u, self.v, self.a, self.f = (arrays[k].copy() for k in ("u", "v", "a", "f"))
-        work, sub, outer, mx = arrays["counters"]
+        self.u, self.v, self.a, self.f, self.f_last = (arrays[k].copy() for k in ("u", "v", "a", "f", "f_last"))
+        work, sub, outer, mx, dt_prev = arrays["counters"]
         self.work, self.substeps, self.outer_steps, self.max_substeps = float(work), int(sub), int(outer), int(mx)
+        self.dt_prev = float(dt_prev)
 
     def summary(self) -> dict[str, Any]:
         b = self.body
         return {"kind": "elastic", "model": b.model, "integrator": b.integrator, "element": b.element,
                 "dofs": b.n_dofs, "elements": int(b.mesh.t.shape[1]), "omega_max_rad_s": self.omega_max,
+                "rayleigh_a0_per_s": self.a0, "rayleigh_a1_s": self.a1,
+                "high_mode_damping_a1_s": self.a1_high, "high_mode_damping_ratio": b.high_mode_damping,
+                "first_mode_damping_ratio": self.first_mode_damping(),
                 "substep_limit_s": self.substep_limit, "outer_steps": self.outer_steps, "substeps": self.substeps,
                 "substeps_per_step_max": self.max_substeps,
                 "substeps_per_step_mean": self.substeps / self.outer_steps if self.outer_steps else None,
+                "newmark_factorisations": self.factorisations if b.integrator == "newmark" else None,
                 "time_s": self.seconds, **{f"end_{k}_J": v for k, v in self.energies().items()}}
 
 
@@ -234,27 +305,34 @@ class RigidMotion:
         self.theta = 0.0
         self.V = body.velocity.copy()
         self.omega = float(body.angular_velocity)
-        self.A = np.zeros(2)
-        self.alpha = 0.0
+        self.A = np.zeros(2)          # acceleration of the centre under the body's own forces (m/s²)
+        self.alpha = 0.0              # and angular acceleration (rad/s²)
         self.F = np.zeros(2)          # resultant of the surface forces of the last exchange (N)
         self.M = 0.0                  # their moment about the centre of mass (N m)
+        self.F_last = np.zeros(2)     # resultant and moment of the exchange before, for the extrapolation
+        self.M_last = 0.0
+        self.dt_prev = 0.0
         self.work = 0.0
         self.substeps = 0
         self.outer_steps = 0
         self.seconds = 0.0
-        h = body.constraint
+        con = body.constraint
         self.g = np.zeros(2) if body.gravity is None else body.gravity
-        if isinstance(h, Hinge):
-            self.p = np.asarray(h.point, dtype=float)
+        if isinstance(con, Hinge):
+            self.p = np.asarray(con.point, dtype=float)
             self.I = body.hinge_inertia()
-            w2 = max(body.natural_frequency_squared(), 0.0)
-            self.omega_n = math.sqrt(w2)
+            self.omega_n = math.sqrt(max(body.natural_frequency_squared(), 0.0))
         else:
             self.p = None
             self.I = body.inertia
             self.omega_n = 0.0
 
-    def _rotation(self, theta: float) -> FloatArray:
+    @property
+    def n_surface(self) -> int:
+        return self.X.shape[0]
+
+    @staticmethod
+    def _rotation(theta: float) -> FloatArray:
         c, s = math.cos(theta), math.sin(theta)
         return np.array([[c, -s], [s, c]])
 
@@ -262,58 +340,83 @@ class RigidMotion:
         """Surface node positions ``(m, 2)`` now (m)."""
         return self.c + (self.X - self.c0) @ self._rotation(self.theta).T
 
-    def _accelerations(self) -> None:
+    def _generalised(self, F: FloatArray, M: float) -> tuple[FloatArray, float]:
+        """Acceleration of the centre and angular acceleration from a force ``F`` and a moment
+        ``M`` about the centre, under the constraint (no body forces)."""
+        con, m = self.body.constraint, self.body.mass
+        if isinstance(con, Hinge):
+            r = self.c - self.p
+            alpha = (M + float(_cross(r, F))) / self.I
+            return alpha * np.array([-r[1], r[0]]), alpha
+        if con == "free":
+            return F / m, M / self.I
+        if con == "vertical":
+            return np.array([0.0, F[1] / m]), 0.0
+        return np.zeros(2), 0.0
+
+    def _own_accelerations(self) -> None:
+        """``A, α`` under the body's own forces: weight, hinge spring and damper."""
         b, m = self.body, self.body.mass
         con = b.constraint
         if isinstance(con, Hinge):
             r = self.c - self.p
-            moment = self.M + float(_cross(r, self.F)) + float(_cross(r, m * self.g))
-            self.alpha = (moment - con.stiffness * self.theta - con.damping * self.omega) / self.I
+            moment = float(_cross(r, m * self.g)) - con.stiffness * self.theta - con.damping * self.omega
+            self.alpha = moment / self.I
             self.A = self.alpha * np.array([-r[1], r[0]]) - self.omega**2 * r
-        elif con == "free":
-            self.A = self.F / m + self.g
-            self.alpha = self.M / self.I
-        elif con == "vertical":
-            self.A = np.array([0.0, self.F[1] / m + self.g[1]])
-            self.alpha = 0.0
         else:
-            self.A, self.alpha = np.zeros(2), 0.0
+            self.A, self.alpha = self._generalised(m * self.g, 0.0)
 
     def start(self) -> None:
-        self._accelerations()
+        self._accelerations(self.F, self.M)
+
+    def _accelerations(self, F: FloatArray, M: float) -> None:
+        """``A, α`` under the body's own forces and the surface force ``F`` with moment ``M``."""
+        self._own_accelerations()
+        dA, dalpha = self._generalised(F, M)
+        self.A, self.alpha = self.A + dA, self.alpha + dalpha
 
     def advance(self, dt: float) -> None:
+        """Over the outer step ``dt`` (s), the surface force and moment ramped from the last
+        exchange's to their extrapolation at the step's end (module docstring)."""
         t0 = time.perf_counter()
         con = self.body.constraint
-        nodes_start = self.nodes()
+        F0, M0 = self.F.copy(), self.M
+        if self.dt_prev > 0:
+            F1 = F0 + (dt / self.dt_prev) * (F0 - self.F_last)
+            M1 = M0 + (dt / self.dt_prev) * (M0 - self.M_last)
+        else:
+            F1, M1 = F0.copy(), M0
+        self.F_last, self.M_last, self.dt_prev = F0, M0, dt
+        c_start, theta_start = self.c.copy(), self.theta
         n = 1
         if self.omega_n > 0:
             n = max(1, math.ceil(dt * self.omega_n / RIGID_PHASE_PER_SUBSTEP * (1.0 - 1e-12)))
         h = dt / n
-        for _ in range(n):
+        self._accelerations(F0, M0)
+        for k in range(n):
+            ramp = (k + 1.0) / n
+            F, M = F0 + ramp * (F1 - F0), M0 + ramp * (M1 - M0)
             if isinstance(con, Hinge):
                 self.omega += 0.5 * h * self.alpha
                 self.theta += h * self.omega
                 self.c = self.p + self._rotation(self.theta) @ (self.c0 - self.p)
+                self._accelerations(F, M)
+                self.omega += 0.5 * h * self.alpha
                 r = self.c - self.p
                 self.V = self.omega * np.array([-r[1], r[0]])
-                self._accelerations()
-                self.omega += 0.5 * h * self.alpha
-                self.V = self.omega * np.array([-r[1], r[0]])
-            else:
+            elif con != "fixed":
                 self.V += 0.5 * h * self.A
                 self.omega += 0.5 * h * self.alpha
                 self.c = self.c + h * self.V
                 self.theta += h * self.omega
-                self._accelerations()
+                self._accelerations(F, M)
                 self.V += 0.5 * h * self.A
                 self.omega += 0.5 * h * self.alpha
-        self.work += float(np.sum(self._held * (self.nodes() - nodes_start))) if self._held is not None else 0.0
+        # work of the surface forces: the ramp's mean force and moment on the step's motion
+        self.work += float(0.5 * (F0 + F1) @ (self.c - c_start)) + 0.5 * (M0 + M1) * (self.theta - theta_start)
         self.substeps += n
         self.outer_steps += 1
         self.seconds += time.perf_counter() - t0
-
-    _held: FloatArray | None = None
 
     def surface(self) -> Surface:
         r = self.nodes() - self.c
@@ -326,21 +429,22 @@ class RigidMotion:
         r = self.nodes() - self.c
         self.F = self.F + forces.sum(axis=0)
         self.M += float(np.sum(_cross(r, forces)))
-        self._held = forces.copy() if self._held is None else self._held + forces
 
     def clear_forces(self) -> None:
         self.F = np.zeros(2)
         self.M = 0.0
-        self._held = None
+
+    def kinetic_energy(self) -> float:
+        b = self.body
+        if isinstance(b.constraint, Hinge):
+            return 0.5 * self.I * self.omega**2
+        return 0.5 * b.mass * float(self.V @ self.V) + 0.5 * b.inertia * self.omega**2
 
     def energies(self) -> dict[str, float]:
         b = self.body
         con = b.constraint
-        if isinstance(con, Hinge):
-            kinetic, spring = 0.5 * self.I * self.omega**2, 0.5 * con.stiffness * self.theta**2
-        else:
-            kinetic, spring = 0.5 * b.mass * float(self.V @ self.V) + 0.5 * b.inertia * self.omega**2, 0.0
-        return {"kinetic_energy": kinetic, "spring_energy": spring,
+        spring = 0.5 * con.stiffness * self.theta**2 if isinstance(con, Hinge) else 0.0
+        return {"kinetic_energy": self.kinetic_energy(), "spring_energy": spring,
                 "weight_potential": -b.mass * float(self.g @ (self.c - self.c0)), "surface_work": self.work}
 
     def observables(self) -> dict[str, float]:
@@ -359,16 +463,16 @@ class RigidMotion:
         return bool(np.all(np.isfinite(self.c)) and math.isfinite(self.theta) and math.isfinite(self.omega))
 
     def checkpoint(self) -> dict[str, FloatArray]:
-        held = np.zeros_like(self.X) if self._held is None else self._held
-        return {"c": self.c.copy(), "V": self.V.copy(), "A": self.A.copy(), "F": self.F.copy(), "held": held.copy(),
-                "scalars": np.array([self.theta, self.omega, self.alpha, self.M, self.work, self.substeps,
-                                     self.outer_steps], dtype=float)}
+        return {"c": self.c.copy(), "V": self.V.copy(), "A": self.A.copy(), "F": self.F.copy(),
+                "F_last": self.F_last.copy(),
+                "scalars": np.array([self.theta, self.omega, self.alpha, self.M, self.M_last, self.work, self.dt_prev,
+                                     self.substeps, self.outer_steps], dtype=float)}
 
     def restore(self, arrays: dict[str, FloatArray]) -> None:
-        self.c, self.V, self.A, self.F = (arrays[k].copy() for k in ("c", "V", "A", "F"))
-        self._held = arrays["held"].copy()
-        th, om, al, M, work, sub, outer = arrays["scalars"]
-        self.theta, self.omega, self.alpha, self.M, self.work = float(th), float(om), float(al), float(M), float(work)
+        self.c, self.V, self.A, self.F, self.F_last = (arrays[k].copy() for k in ("c", "V", "A", "F", "F_last"))
+        th, om, al, M, M_last, work, dt_prev, sub, outer = arrays["scalars"]
+        self.theta, self.omega, self.alpha, self.M, self.M_last = float(th), float(om), float(al), float(M), float(M_last)
+        self.work, self.dt_prev = float(work), float(dt_prev)
         self.substeps, self.outer_steps = int(sub), int(outer)
 
     def summary(self) -> dict[str, Any]:

@@ -170,7 +170,7 @@ class RigidBody(Body):
     # ------------------------------------------------------------------ builders
     @classmethod
     def beam(cls, name: str, base: ArrayLike, length: float, mass: float, thickness: float,
-             constraint: str | Hinge = "free", gravity: ArrayLike | None = None, angle: float = 0.0) -> "RigidBody":
+             constraint: str | Hinge = "free", gravity: ArrayLike | None = None, angle: float = 0.0) -> RigidBody:
         """A uniform rectangular beam standing on ``base`` (m) at ``angle`` from the vertical
         (rad, counter-clockwise), ``length × thickness`` (m); inertia ``m(L² + t²)/12`` about
         its centre; the surface is its outline (normals out of the beam)."""

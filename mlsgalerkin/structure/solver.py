@@ -89,7 +89,7 @@ class StructureSolver(Solver):
     key = "structure"
 
     @classmethod
-    def problems(cls, bodies: list[Body], scene: "Scene") -> list[str]:
+    def problems(cls, bodies: list[Body], scene: Scene) -> list[str]:
         out = []
         if scene.dt_max is None and all(isinstance(b, (ElasticBody, RigidBody)) for b in scene.bodies):
             out.append("a scene of structures alone needs an outer time step: set dt_max= (s); the structure "
@@ -103,7 +103,7 @@ class StructureSolver(Solver):
                            "singular); give clamped= or use the explicit integrator")
         return out
 
-    def __init__(self, bodies: list[Body], scene: "Scene") -> None:
+    def __init__(self, bodies: list[Body], scene: Scene) -> None:
         self.scene = scene
         self._state = StructureState({b.name: (ElasticMotion(b) if isinstance(b, ElasticBody) else RigidMotion(b))
                                       for b in bodies})
@@ -134,7 +134,7 @@ class StructureSolver(Solver):
     def add_surface_forces(self, body: str, forces: np.ndarray) -> None:
         m = self._state.motions[body]
         f = np.asarray(forces, dtype=float)
-        expected = m.surface().positions.shape
+        expected = (m.n_surface, 2)
         if f.shape != expected:
             raise ValueError(f"structure body {body!r}: surface forces must have shape {expected}, got {f.shape}")
         m.add_forces(f)

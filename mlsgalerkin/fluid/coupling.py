@@ -1,0 +1,197 @@
+r""":class:`StructureCoupling`: the fluid loads a structure, and the structure bounds the fluid.
+
+A structure (any body whose solver exposes a :class:`~mlsgalerkin.dynamics.Surface` with
+segments: an elastic body on scikit-fem, a rigid body) meets a fluid body in two ways, both
+momentum-conserving, both every step:
+
+1. **Wall particles riding on the structure** (a :class:`~mlsgalerkin.fluid.bodies.WallBody`
+   built by :meth:`~mlsgalerkin.fluid.bodies.WallBody.on_surface`, ``follows`` the structure).
+   Each sits on a segment ``(a, b)`` of the structure's wet surface at ``ξ`` and depth ``δ``:
+
+   .. math:: \mathbf x_w = (1-\xi)\mathbf x_a + \xi\mathbf x_b - \delta\,\mathbf n,\quad
+             \mathbf v_w = (1-\xi)\mathbf v_a + \xi\mathbf v_b - \delta\,\dot{\mathbf n},\quad
+             \mathbf a_w = (1-\xi)\mathbf a_a + \xi\mathbf a_b,
+
+   set at the exchange of every step (``t + Δt``, the structure already advanced), so the
+   fluid's wall treatment (:class:`~mlsgalerkin.fluid.walls.Walls`) sees the surface's velocity
+   and acceleration (``g − a_w`` in the extrapolated wall pressure). They close the fluid's
+   nodal Galerkin sums at the structure as wall particles do at a fixed wall. Their reaction —
+   the nodal force of the fluid on them, :math:`\mathbf f_w = -\sum_k\sigma_k\nabla N_w(\mathbf
+   x_k)V_k` (the sums over all nodes add to zero, so this is exactly what the fluid lost) — goes
+   to the segment's nodes after the fluid's force evaluation (:meth:`after_step`):
+   :math:`\mathbf f_a \mathrel{+}= (1-\xi)\mathbf f_w`, :math:`\mathbf f_b \mathrel{+}= \xi\mathbf f_w`.
+2. **Node-to-surface penalty contact** of the fluid particles (slaves) on the structure's
+   surface (master) — :class:`~mlsgalerkin.contact.PenaltyContact`: no particle passes
+   through the structure, and the contact reactions go to the structure's surface nodes.
+
+The coupling is explicit and staggered (the structure advances with the loads of the last step,
+then the fluid with the structure's new position); the loads of a step reach the structure in
+the next. The time step is the fluid's and the contact's (the structure sub-cycles inside it).
+
+>>> StructureCoupling("water", "gate", walls="gate_walls", thickness=0.001)
+StructureCoupling(fluid='water', structure='gate', walls='gate_walls', contact=PenaltyContact(...))
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mlsgalerkin.contact import PenaltyContact
+from mlsgalerkin.contact.surface import SurfacePoints
+from mlsgalerkin.contact.penalty import DEFAULT_ALPHA, DEFAULT_DAMPING, DEFAULT_FEATURE_ANGLE
+from mlsgalerkin.dynamics import Interaction, Solver, Surface
+from mlsgalerkin.fluid.bodies import FluidBody, WallBody
+
+if TYPE_CHECKING:  # pragma: no cover
+    from mlsgalerkin.scene import Scene
+
+__all__ = ["StructureCoupling", "riding_kinematics"]
+
+FloatArray = NDArray[np.float64]
+
+
+def riding_kinematics(surface: Surface, footprints: SurfacePoints, anchors: FloatArray
+                     ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Positions, velocities, accelerations and normals ``(n, 2)`` of wall particles riding on
+    the 2D ``surface`` at the ``anchors`` (point, depth) of ``footprints`` (module docstring)."""
+    x, v, n, dn = footprints.kinematics(surface.positions, surface.velocities)
+    point = anchors[:, 3].astype(np.int64)
+    depth = anchors[:, 2:3]
+    pos = x[point] - depth * n[point]
+    vel = v[point] - depth * dn[point]
+    acc = (footprints.average @ surface.accelerations)[point] if surface.accelerations is not None else np.zeros_like(pos)
+    return pos, vel, acc, n[point]
+
+
+class StructureCoupling(Interaction):
+    """Fluid body ``fluid`` against structure body ``structure``: the wall particles ``walls``
+    riding on it, and penalty contact (module docstring).
+
+    Parameters
+    ----------
+    fluid, structure : str
+        Body names (``first`` and ``second`` of the interaction).
+    walls : str, optional
+        A wall body built with ``WallBody.on_surface(..., follows=structure)``; without it the
+        structure is a penalty surface only (the fluid's pressure next to it is then wrong
+        wherever the fluid rests on it: ``docs/theory/contact.md``).
+    thickness, reach, alpha, damping, dt_ref, feature_angle
+        The penalty contact's parameters (:class:`~mlsgalerkin.contact.PenaltyContact`):
+        thickness ``g0`` (m, half the particle spacing), reach (m, default ``2 g0``), stiffness
+        factor, damping ratio, reference step (s), feature angle (degrees).
+    name : str
+        Key in ``summary.json``.
+    """
+
+    def __init__(self, fluid: str, structure: str, *, walls: str | None = None, thickness: float = 0.0,
+                 reach: float | None = None, alpha: float = DEFAULT_ALPHA, damping: float = DEFAULT_DAMPING,
+                 dt_ref: float | None = None, feature_angle: float = DEFAULT_FEATURE_ANGLE,
+                 wall_acceleration: bool = True, name: str = "coupling") -> None:
+        self.first, self.second, self.walls, self.name = fluid, structure, walls, name
+        self.contact = PenaltyContact(fluid, structure, thickness=thickness, reach=reach, alpha=alpha,
+                                      damping=damping, dt_ref=dt_ref, feature_angle=feature_angle,
+                                      name=f"{name}_contact")
+        self._anchors: FloatArray | None = None
+        self._footprints: SurfacePoints | None = None
+        self._previous: tuple | None = None
+        self.wall_acceleration = wall_acceleration
+        self.reaction = np.zeros(2)       # total wall-particle reaction of the last step (N)
+        self.contact_force = np.zeros(2)  # total contact force on the structure of the last step (N)
+        self.peak_load = 0.0
+        self.time_of_peak_load: float | None = None
+
+    def __repr__(self) -> str:
+        return (f"StructureCoupling(fluid={self.first!r}, structure={self.second!r}, walls={self.walls!r}, "
+                f"contact={self.contact!r})")
+
+    # ------------------------------------------------------------------ validation
+    def problems(self, scene: "Scene") -> list[str]:
+        owner = f"StructureCoupling {self.name!r}"
+        out = super().problems(scene)
+        bodies = {b.name: b for b in scene.bodies}
+        if self.first in bodies and not isinstance(bodies[self.first], FluidBody):
+            out.append(f"{owner}: {self.first!r} must be a FluidBody (the slave side), got "
+                       f"{type(bodies[self.first]).__name__}")
+        if self.walls is not None:
+            w = bodies.get(self.walls)
+            if not isinstance(w, WallBody):
+                out.append(f"{owner}: walls={self.walls!r} names no WallBody of the scene")
+            elif w.follows != self.second:
+                out.append(f"{owner}: the wall body {self.walls!r} must follow {self.second!r} (build it with "
+                           f"WallBody.on_surface(..., follows={self.second!r})), it follows {w.follows!r}")
+            else:
+                self._anchors = np.asarray(w.anchors, dtype=float)
+                self._footprints = w.footprints
+        out += [p.replace("PenaltyContact", owner + ": contact", 1) for p in self.contact.problems(scene)
+                if "no body named" not in p]
+        return out
+
+    # ------------------------------------------------------------------ per step
+    def exchange(self, t: float, first: Solver, second: Solver) -> None:
+        """Wall particles to the structure's surface at ``t``; penalty contact both ways."""
+        if self.walls is not None:
+            surf = second.surface(self.second)
+            fp = self._footprints
+            if fp is None or fp.average.shape[1] != surf.positions.shape[0]:
+                raise ValueError(f"StructureCoupling {self.name!r}: the wall particles of {self.walls!r} were built on "
+                                 f"a surface of {None if fp is None else fp.average.shape[1]} nodes, but "
+                                 f"{self.second!r} has {surf.positions.shape[0]}; build them from that body's surface")
+            x, v, a, n = riding_kinematics(surf, fp, self._anchors)
+            if self._previous is not None and t > self._previous[0]:
+                # what the fluid's step sees: the structure's motion over the step, not the
+                # instantaneous state of its sub-steps (whose stiff modes ring)
+                t_old, x_old, v_old, dt_old = self._previous
+                dt = t - t_old
+                v = (x - x_old) / dt
+                a = (v - v_old) / (0.5 * (dt + dt_old)) if dt_old > 0 else a
+                self._previous = (t, x, v, dt)
+            else:
+                self._previous = (t, x, v, 0.0)
+            if not self.wall_acceleration:
+                a = np.zeros_like(a)
+            first.drive_walls(self.walls, t, x, v, a, n)
+        self.contact.exchange(t, first, second)
+
+    def after_step(self, t: float, first: Solver, second: Solver) -> None:
+        """The fluid's reaction on the wall particles to the structure's surface nodes."""
+        if self.walls is None:
+            self._record(t)
+            return
+        f_w = first.wall_reactions(self.walls)
+        # the transpose of the map that placed them: each particle's force spread over the
+        # surface nodes of its footprint (virtual work; the total is kept exactly)
+        point = self._anchors[:, 3].astype(np.int64)
+        per_point = np.zeros((self._footprints.average.shape[0], f_w.shape[1]))
+        np.add.at(per_point, point, f_w)
+        second.add_surface_forces(self.second, self._footprints.average.T @ per_point)
+        self.reaction = f_w.sum(axis=0)
+        self._record(t)
+
+    def _record(self, t: float) -> None:
+        contact = np.asarray(self.contact.last.get("force", [0.0, 0.0]), dtype=float)  # on the structure
+        self.contact_force = contact
+        load = float(np.linalg.norm(self.reaction + contact))
+        if load > self.peak_load:
+            self.peak_load, self.time_of_peak_load = load, float(t)
+
+    def stable_time_step(self) -> float:
+        return self.contact.stable_time_step()
+
+    # ------------------------------------------------------------------ restart and report
+    def state_dict(self) -> dict[str, Any]:
+        return {"contact": self.contact.state_dict(), "reaction": self.reaction.tolist(),
+                "peak_load": self.peak_load, "time_of_peak_load": self.time_of_peak_load}
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        self.contact.load_state_dict(d["contact"])
+        self.reaction = np.asarray(d["reaction"], dtype=float)
+        self.peak_load, self.time_of_peak_load = float(d["peak_load"]), d["time_of_peak_load"]
+
+    def summary(self) -> dict[str, Any]:
+        return {"fluid": self.first, "structure": self.second, "walls": self.walls,
+                "last_wall_reaction_N": self.reaction.tolist(), "last_contact_force_N": self.contact_force.tolist(),
+                "peak_load_N": self.peak_load, "time_of_peak_load_s": self.time_of_peak_load,
+                "contact": self.contact.summary()}
