@@ -97,7 +97,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     layers = max(1, min(3, int(p.thickness / p.dx)))
     riding = WallBody.on_surface("beam_walls", beam.wet.contact_surface(), p.dx, follows="beam", layers=layers,
                                  reference_density=p.rho)
-    coupling = StructureCoupling("water", "beam", walls="beam_walls", thickness=0.5 * p.dx)
+    coupling = StructureCoupling("water", "beam", walls="beam_walls", thickness=0.25 * p.dx)
     effects = [TaitPressure(c0, u_max=u_max, negative_pressure=p.negative_pressure), Gravity((0.0, -p.g)),
                Walls("free_slip"), MonaghanViscosity(p.alpha)]
     effects += stabilisation(delta=p.delta, shifting=p.shifting, negative_pressure=p.negative_pressure,

@@ -53,6 +53,7 @@ class Parameters:
     dx: float = 0.025           #: particle spacing (m)
     elements: int = 40          #: Q2 elements along the plate (two through its thickness) (–)
     integrator: str = "newmark" #: plate time integrator: newmark or explicit (choice)
+    wall_acceleration: float = 1.0  #: share of the plate's acceleration the wall pressure sees, 0 to 1 (–)
     t_end: float = 0.5          #: end time (s)
     alpha: float = 0.2          #: Monaghan artificial viscosity α, as in the hydrostatic tank (–)
     c0_factor: float = 10.0     #: sound speed / sqrt(2 g H) (–)
@@ -97,7 +98,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     plate = _plate(p)
     riding = WallBody.on_surface("plate_walls", plate.wet.contact_surface(), p.dx, follows="plate",
                                  reference_density=p.rho)
-    coupling = StructureCoupling("water", "plate", walls="plate_walls", thickness=0.5 * p.dx)
+    coupling = StructureCoupling("water", "plate", walls="plate_walls", thickness=0.25 * p.dx,
+                                 wall_acceleration=p.wall_acceleration)
     n = water.n
 
     def midspan(state) -> float:

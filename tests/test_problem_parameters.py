@@ -30,7 +30,7 @@ PROBLEM_FILES = sorted(p for p in (ROOT / "problems").glob("*.py") if not p.name
 
 #: The units the shipped problems use: SI, "–" for a dimensionless number, "bool" for a
 #: switch, "choice" for one of the named options the meaning lists.
-UNITS = {"Pa", "N m/rad", "kg", "kg/m", "m", "s", "m/s", "m/s²", "kg/m³", "Pa s", "–", "bool", "choice"}
+UNITS = {"deg", "Pa", "N m/rad", "kg", "kg/m", "m", "s", "m/s", "m/s²", "kg/m³", "Pa s", "–", "bool", "choice"}
 
 
 def test_the_repository_ships_the_listed_problems():

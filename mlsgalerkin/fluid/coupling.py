@@ -89,7 +89,7 @@ class StructureCoupling(Interaction):
     def __init__(self, fluid: str, structure: str, *, walls: str | None = None, thickness: float = 0.0,
                  reach: float | None = None, alpha: float = DEFAULT_ALPHA, damping: float = DEFAULT_DAMPING,
                  dt_ref: float | None = None, feature_angle: float = DEFAULT_FEATURE_ANGLE,
-                 wall_acceleration: bool = True, name: str = "coupling") -> None:
+                 wall_acceleration: float = 0.0, name: str = "coupling") -> None:
         self.first, self.second, self.walls, self.name = fluid, structure, walls, name
         self.contact = PenaltyContact(fluid, structure, thickness=thickness, reach=reach, alpha=alpha,
                                       damping=damping, dt_ref=dt_ref, feature_angle=feature_angle,
@@ -150,8 +150,7 @@ class StructureCoupling(Interaction):
                 self._previous = (t, x, v, dt)
             else:
                 self._previous = (t, x, v, 0.0)
-            if not self.wall_acceleration:
-                a = np.zeros_like(a)
+            a = float(self.wall_acceleration) * a
             first.drive_walls(self.walls, t, x, v, a, n)
         self.contact.exchange(t, first, second)
 
