@@ -189,6 +189,19 @@ class Interaction(ABC):
         """Largest stable time step this interaction allows (s); ``inf`` if none."""
         return float("inf")
 
+    #: Whether the run loop repeats each step until this interaction converges (implicit,
+    #: partitioned coupling): every solver is restored to the step's start before each repeat.
+    iterates: bool = False
+    #: The most passes of one step an iterating interaction asks for.
+    max_iterations: int = 1
+
+    def begin_iteration(self, k: int, t: float, dt: float, first: Solver, second: Solver) -> None:
+        """Before pass ``k`` (from 0) of the step from ``t`` to ``t + dt`` (iterating interactions)."""
+
+    def end_iteration(self, k: int, t: float, first: Solver, second: Solver) -> bool:
+        """After pass ``k``, at ``t`` (the step's end): ``True`` when converged (iterating interactions)."""
+        return True
+
     def __repr__(self) -> str:
         """Names the interaction and its bodies; subclasses add their parameters (a run's identity
         compares reprs, so a restart with other parameters is noticed)."""

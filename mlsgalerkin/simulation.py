@@ -219,9 +219,37 @@ class Simulation:
         return min(limits)
 
     def step(self, dt: float) -> None:
-        """Advance every body by ``dt``: begin, exchange, end (no monitors)."""
+        """Advance every body by ``dt``: begin, exchange, end, after-step (no monitors). With an
+        iterating interaction (:attr:`~mlsgalerkin.dynamics.Interaction.iterates`) the step is
+        repeated from the same start, every solver restored, until each such interaction says
+        it has converged (:meth:`~mlsgalerkin.dynamics.Interaction.end_iteration`)."""
         st = self.state
         t = st.t
+        iterating = [i for i in self.scene.interactions if i.iterates]
+        if not iterating:
+            self._one_pass(t, dt)
+        else:
+            saved = [(s, s.checkpoint()) for s in self.solvers]
+            others = [(i, i.state_dict()) for i in self.scene.interactions if not i.iterates]
+            limit = max(i.max_iterations for i in iterating)
+            for k in range(limit):
+                if k:
+                    for s, (arrays, meta) in saved:
+                        s.restore(arrays, meta)
+                    for i, d in others:
+                        i.load_state_dict(d)
+                for i in iterating:
+                    i.begin_iteration(k, t, dt, self._solver_of[i.first], self._solver_of[i.second])
+                self._one_pass(t, dt)
+                done = [i.end_iteration(k, t + dt, self._solver_of[i.first], self._solver_of[i.second])
+                        for i in iterating]
+                if all(done):
+                    break
+        st.t = t + dt
+        st.step += 1
+        st.dt = dt
+
+    def _one_pass(self, t: float, dt: float) -> None:
         for s in self.solvers:
             s.begin_step(t, dt)
         if self.scene.interactions:
@@ -233,9 +261,6 @@ class Simulation:
             s.end_step(t, dt)
         for i in self.scene.interactions:
             i.after_step(t + dt, self._solver_of[i.first], self._solver_of[i.second])
-        st.t = t + dt
-        st.step += 1
-        st.dt = dt
 
     # ------------------------------------------------------------------ checkpoints
     def snapshot(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:

@@ -119,6 +119,8 @@ def oscillation_period(t: np.ndarray, y: np.ndarray, start: float) -> tuple[floa
     """Mean period (s) of ``y`` after ``start`` from its upward crossings of its own mean, and the
     number of periods it is measured over."""
     sel = t >= start
+    if sel.sum() < 3:
+        return float("nan"), 0
     t, y = t[sel], y[sel] - y[sel].mean()
     k = np.flatnonzero((y[:-1] < 0) & (y[1:] >= 0))
     tc = t[k] - y[k] * (t[k + 1] - t[k]) / (y[k + 1] - y[k])

@@ -10,10 +10,14 @@ wall particles riding on it and node-to-surface penalty contact
 (:class:`~mlsgalerkin.fluid.StructureCoupling`).
 
 **Elastic constants.** The published values differ by source: ``E = 12`` MPa with ``ν = 0.4``
-(Antoci et al. 2007, the rubber's tensile test), 10 MPa with ``ν = 0.49`` and 7.8 MPa with
-``ν = 0.47`` (later SPH and SPH–FE papers, fitted to the experiment). The default is ``E = 12``
-MPa, ``ν = 0.4``: the measured values of the experiment itself, not a fit; the run with 10 MPa is
-reported beside it (``verification/results/structure/``). The rubber's density is 1100 kg/m³.
+(Antoci et al. 2007, from the rubber's tensile test), 10 MPa with ``ν = 0.49`` and 7.8 MPa with
+``ν = 0.47`` (later SPH and SPH–FE studies, identified from the gate's own recorded motion). The
+default is ``E = 7.8`` MPa, ``ν = 0.47``: after the first opening the gate of the experiment
+stays about 40 mm open under a water column that has fallen to about 0.11 m, which the stiffer
+values cannot hold (with 12 MPa this model settles near 25 mm under the same column). It is a
+value fitted to this experiment, so agreement in amplitude is partly by construction; the runs
+with 10 and 12 MPa are reported beside it (``verification/results/structure/``). The rubber's
+density is 1100 kg/m³.
 
 Reference: the experiment's displacement of the gate's free end (shipped as
 ``mlsgalerkin/data/antoci_2007_elastic_gate.csv``): ``tip_x`` peaks at 46.4 mm at about
@@ -51,8 +55,8 @@ class Parameters:
     column_height: float = 0.14   #: water column height H (m)
     gate_length: float = 0.079    #: gate length below its clamped top (m)
     thickness: float = 0.005      #: gate thickness (m)
-    young: float = 12.0e6         #: gate Young's modulus (Pa)
-    poisson: float = 0.4          #: gate Poisson's ratio (–)
+    young: float = 7.8e6          #: gate Young's modulus (Pa)
+    poisson: float = 0.47         #: gate Poisson's ratio (–)
     rho_gate: float = 1100.0      #: rubber density (kg/m³)
     model: str = "neo_hookean"    #: gate material: neo_hookean, stvenant_kirchhoff or linear (choice)
     wall_acceleration: float = 0.0  #: share of the gate's acceleration the wall pressure sees, 0 to 1 (–)

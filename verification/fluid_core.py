@@ -150,13 +150,14 @@ def runner(args):
     return one
 
 
-def write_table(out: Path, name: str, rows: list[dict], title: str, notes: str, columns: list[str]) -> None:
+def write_table(out: Path, name: str, rows: list[dict], title: str, notes: str, columns: list[str],
+                report: str = "fluid_core") -> None:
     keys = [c for c in columns if any(c in r for r in rows)]
     atomic_write(out / f"{name}.csv", csv_text(keys, [[format_cell(r.get(k, "")) for k in keys] for r in rows]))
     lines = [f"# {title}", "", notes.strip(), "", "| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
     for r in rows:
         lines.append("| " + " | ".join(format_cell(r.get(k, "")) for k in keys) + " |")
-    prov = provenance(f"fluid_core/{name}")
+    prov = provenance(f"{report}/{name}")
     lines += ["", "Produced by: `" + prov["command"] + "`, mlsgalerkin " + prov["mlsgalerkin_version"]
               + f", commit {prov['git_commit']}, {prov['date_utc']}, {prov['machine']}."]
     atomic_write(out / f"{name}.md", "\n".join(lines) + "\n")

@@ -48,7 +48,10 @@ from mlsgalerkin.fluid.bodies import FluidBody, WallBody
 if TYPE_CHECKING:  # pragma: no cover
     from mlsgalerkin.scene import Scene
 
-__all__ = ["StructureCoupling", "riding_kinematics"]
+__all__ = ["AITKEN_RANGE", "StructureCoupling", "riding_kinematics"]
+
+#: Bounds of Aitken's relaxation factor ω.
+AITKEN_RANGE = (1e-3, 1.0)
 
 FloatArray = NDArray[np.float64]
 
@@ -89,23 +92,45 @@ class StructureCoupling(Interaction):
     def __init__(self, fluid: str, structure: str, *, walls: str | None = None, thickness: float = 0.0,
                  reach: float | None = None, alpha: float = DEFAULT_ALPHA, damping: float = DEFAULT_DAMPING,
                  dt_ref: float | None = None, feature_angle: float = DEFAULT_FEATURE_ANGLE,
-                 wall_acceleration: float = 0.0, name: str = "coupling") -> None:
+                 wall_acceleration: float = 0.0, iterations: int = 1, tolerance: float = 1e-5,
+                 relaxation: float = 0.5, name: str = "coupling") -> None:
         self.first, self.second, self.walls, self.name = fluid, structure, walls, name
         self.contact = PenaltyContact(fluid, structure, thickness=thickness, reach=reach, alpha=alpha,
                                       damping=damping, dt_ref=dt_ref, feature_angle=feature_angle,
                                       name=f"{name}_contact")
         self._anchors: FloatArray | None = None
         self._footprints: SurfacePoints | None = None
-        self._previous: tuple | None = None
+        self._previous: tuple | None = None     # wall kinematics of the last accepted step
+        self._pending: tuple | None = None      # ... of this step, until it is accepted
         self.wall_acceleration = wall_acceleration
+        self.iterations, self.tolerance, self.relaxation = iterations, tolerance, relaxation
         self.reaction = np.zeros(2)       # total wall-particle reaction of the last step (N)
         self.contact_force = np.zeros(2)  # total contact force on the structure of the last step (N)
         self.peak_load = 0.0
         self.time_of_peak_load: float | None = None
+        # partitioned iteration: the relaxed interface, the last residual, the load of the last pass
+        self._guess: tuple | None = None
+        self._residual: FloatArray | None = None
+        self._omega = relaxation
+        self._load = None
+        self.crms = float("nan")
+        self.passes: list[int] = []
+        self.unconverged_steps = 0
+
+    @property
+    def iterates(self) -> bool:
+        """Partitioned iteration (``iterations > 1``): each step is repeated until the interface
+        displacement converges (module docstring)."""
+        return self.iterations > 1
+
+    @property
+    def max_iterations(self) -> int:
+        return self.iterations
 
     def __repr__(self) -> str:
         return (f"StructureCoupling(fluid={self.first!r}, structure={self.second!r}, walls={self.walls!r}, "
-                f"contact={self.contact!r})")
+                f"wall_acceleration={self.wall_acceleration!r}, iterations={self.iterations!r}, "
+                f"tolerance={self.tolerance!r}, relaxation={self.relaxation!r}, contact={self.contact!r})")
 
     # ------------------------------------------------------------------ validation
     def problems(self, scene: "Scene") -> list[str]:
@@ -127,6 +152,19 @@ class StructureCoupling(Interaction):
                 self._footprints = w.footprints
         out += [p.replace("PenaltyContact", owner + ": contact", 1) for p in self.contact.problems(scene)
                 if "no body named" not in p]
+        if not (isinstance(self.wall_acceleration, (int, float)) and 0.0 <= self.wall_acceleration <= 1.0):
+            out.append(f"{owner}: wall_acceleration is the share of the structure's acceleration the wall pressure "
+                       f"sees, in [0, 1]; got {self.wall_acceleration!r}")
+        if not (isinstance(self.iterations, int) and self.iterations >= 1):
+            out.append(f"{owner}: iterations must be a positive integer (1: explicit coupling), got {self.iterations!r}")
+        if not (isinstance(self.tolerance, (int, float)) and self.tolerance > 0):
+            out.append(f"{owner}: tolerance must be positive (m, the CRMS of the interface residual), got "
+                       f"{self.tolerance!r}")
+        if not (isinstance(self.relaxation, (int, float)) and 0.0 < self.relaxation <= 1.0):
+            out.append(f"{owner}: relaxation must be in (0, 1], got {self.relaxation!r}")
+        if self.iterates and self.walls is None:
+            out.append(f"{owner}: the partitioned iteration relaxes the wall particles riding on the structure; "
+                       "give walls=")
         return out
 
     # ------------------------------------------------------------------ per step
@@ -140,6 +178,8 @@ class StructureCoupling(Interaction):
                                  f"a surface of {None if fp is None else fp.average.shape[1]} nodes, but "
                                  f"{self.second!r} has {surf.positions.shape[0]}; build them from that body's surface")
             x, v, a, n = riding_kinematics(surf, fp, self._anchors)
+            if self.iterates:
+                x, v, a = self._relaxed(x, v, a)
             if self._previous is not None and t > self._previous[0]:
                 # what the fluid's step sees: the structure's motion over the step, not the
                 # instantaneous state of its sub-steps (whose stiff modes ring)
@@ -147,9 +187,11 @@ class StructureCoupling(Interaction):
                 dt = t - t_old
                 v = (x - x_old) / dt
                 a = (v - v_old) / (0.5 * (dt + dt_old)) if dt_old > 0 else a
-                self._previous = (t, x, v, dt)
+                self._pending = (t, x, v, dt)
             else:
-                self._previous = (t, x, v, 0.0)
+                self._pending = (t, x, v, 0.0)
+            if not self.iterates:
+                self._previous = self._pending
             a = float(self.wall_acceleration) * a
             first.drive_walls(self.walls, t, x, v, a, n)
         self.contact.exchange(t, first, second)
@@ -169,6 +211,51 @@ class StructureCoupling(Interaction):
         self.reaction = f_w.sum(axis=0)
         self._record(t)
 
+    # ------------------------------------------------------------------ partitioned iteration
+    def _relaxed(self, x: FloatArray, v: FloatArray, a: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The interface of this pass: the structure's answer ``x*`` on the first, then
+        ``x̃ ← x̃ + ω r`` with the residual ``r = x* − x̃`` and Aitken's factor (module docstring)."""
+        if self._guess is None:
+            self._residual = None
+            self._guess = (x, v, a)
+            return x, v, a
+        gx, gv, ga = self._guess
+        r = x - gx
+        if self._residual is not None:
+            dr = r - self._residual
+            denom = float(np.sum(dr * dr))
+            if denom > 0:
+                self._omega = float(np.clip(-self._omega * float(np.sum(self._residual * dr)) / denom,
+                                            AITKEN_RANGE[0], AITKEN_RANGE[1]))
+        self._residual = r
+        first = self._anchors[:, 2] <= self._anchors[:, 2].min() * (1 + 1e-9)   # the layer next to the surface
+        self.crms = float(np.sqrt(np.mean(np.sum(r[first] ** 2, axis=1))))
+        w = self._omega
+        self._guess = (gx + w * r, gv + w * (v - gv), ga + w * (a - ga))
+        return self._guess
+
+    def begin_iteration(self, k: int, t: float, dt: float, first: Solver, second: Solver) -> None:
+        """Pass ``k``: from the second on, the structure advances with the load the fluid gave in
+        the pass before, at the step's end (an implicit structure, Newmark, solves with it)."""
+        if k == 0:
+            self._guess, self._residual, self.crms = None, None, float("nan")
+            self._omega = float(np.clip(self._omega, AITKEN_RANGE[0], self.relaxation))
+        elif self._load is not None:
+            second.set_step_end_load(self.second, self._load)
+
+    def end_iteration(self, k: int, t: float, first: Solver, second: Solver) -> bool:
+        """Converged when the CRMS of the interface residual is below ``tolerance`` (from the second
+        pass on), or at the last pass; the step is then accepted."""
+        self._load = second.step_end_load(self.second)
+        done = (k >= 1 and self.crms < self.tolerance) or k + 1 >= self.iterations
+        if done:
+            if not (k >= 1 and self.crms < self.tolerance):
+                self.unconverged_steps += 1
+            self.passes.append(k + 1)
+            self._previous = self._pending
+            self._load = None
+        return done
+
     def _record(self, t: float) -> None:
         contact = np.asarray(self.contact.last.get("force", [0.0, 0.0]), dtype=float)  # on the structure
         self.contact_force = contact
@@ -181,16 +268,36 @@ class StructureCoupling(Interaction):
 
     # ------------------------------------------------------------------ restart and report
     def state_dict(self) -> dict[str, Any]:
+        prev = None
+        if self._previous is not None:
+            t_p, x_p, v_p, dt_p = self._previous
+            prev = [float(t_p), np.asarray(x_p).tolist(), np.asarray(v_p).tolist(), float(dt_p)]
         return {"contact": self.contact.state_dict(), "reaction": self.reaction.tolist(),
-                "peak_load": self.peak_load, "time_of_peak_load": self.time_of_peak_load}
+                "peak_load": self.peak_load, "time_of_peak_load": self.time_of_peak_load, "previous": prev,
+                "omega": self._omega, "passes": list(self.passes), "unconverged_steps": self.unconverged_steps}
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
         self.contact.load_state_dict(d["contact"])
         self.reaction = np.asarray(d["reaction"], dtype=float)
         self.peak_load, self.time_of_peak_load = float(d["peak_load"]), d["time_of_peak_load"]
+        prev = d.get("previous")
+        self._previous = None if prev is None else (prev[0], np.asarray(prev[1], dtype=float),
+                                                    np.asarray(prev[2], dtype=float), prev[3])
+        self._omega = float(d.get("omega", self.relaxation))
+        self.passes = list(d.get("passes", []))
+        self.unconverged_steps = int(d.get("unconverged_steps", 0))
 
     def summary(self) -> dict[str, Any]:
-        return {"fluid": self.first, "structure": self.second, "walls": self.walls,
-                "last_wall_reaction_N": self.reaction.tolist(), "last_contact_force_N": self.contact_force.tolist(),
-                "peak_load_N": self.peak_load, "time_of_peak_load_s": self.time_of_peak_load,
-                "contact": self.contact.summary()}
+        out = {"fluid": self.first, "structure": self.second, "walls": self.walls,
+               "wall_acceleration": self.wall_acceleration,
+               "last_wall_reaction_N": self.reaction.tolist(), "last_contact_force_N": self.contact_force.tolist(),
+               "peak_load_N": self.peak_load, "time_of_peak_load_s": self.time_of_peak_load,
+               "contact": self.contact.summary()}
+        if self.iterates:
+            passes = np.asarray(self.passes) if self.passes else np.zeros(1)
+            out["partitioned_iteration"] = {
+                "tolerance_crms_m": self.tolerance, "max_passes": self.iterations, "initial_relaxation": self.relaxation,
+                "passes_mean": float(passes.mean()), "passes_max": int(passes.max()),
+                "steps_not_converged": self.unconverged_steps, "last_crms_m": self.crms,
+                "last_relaxation": self._omega}
+        return out

@@ -113,6 +113,7 @@ class ElasticMotion:
         self.outer_steps = 0
         self.max_substeps = 0
         self.seconds = 0.0
+        self._f_end: FloatArray | None = None
         self._lu: Any = None
         self._lu_dt = 0.0
         self.factorisations = 0
@@ -140,12 +141,26 @@ class ElasticMotion:
         a[self.fixed] = 0.0
         return a
 
+    def step_end_load(self) -> FloatArray:
+        """The surface forces added since the last clear (N per degree of freedom)."""
+        return self.f.copy()
+
+    def set_step_end_load(self, load: FloatArray) -> None:
+        """Use ``load`` as the surface forces at the end of the next step instead of the
+        extrapolation (a partitioned iteration's load of its last pass)."""
+        self._f_end = np.asarray(load, dtype=float).copy()
+
     def load_ramp(self, dt: float) -> tuple[FloatArray, FloatArray]:
         """The surface forces at the start of the outer step (those of the last exchange) and at
-        its end, extrapolated linearly from the exchange before (module docstring)."""
+        its end, extrapolated linearly from the exchange before, or as set by
+        :meth:`set_step_end_load` (module docstring)."""
         f0 = self.f.copy()
         f0[self.fixed] = 0.0
-        f1 = f0 + (dt / self.dt_prev) * (f0 - self.f_last) if self.dt_prev > 0 else f0.copy()
+        if self._f_end is not None:
+            f1, self._f_end = self._f_end, None
+            f1[self.fixed] = 0.0
+        else:
+            f1 = f0 + (dt / self.dt_prev) * (f0 - self.f_last) if self.dt_prev > 0 else f0.copy()
         self.f_last[:] = f0
         self.dt_prev = dt
         return f0, f1
@@ -311,6 +326,7 @@ class RigidMotion:
         self.M = 0.0                  # their moment about the centre of mass (N m)
         self.F_last = np.zeros(2)     # resultant and moment of the exchange before, for the extrapolation
         self.M_last = 0.0
+        self._end: tuple[FloatArray, float] | None = None
         self.dt_prev = 0.0
         self.work = 0.0
         self.substeps = 0
@@ -381,7 +397,9 @@ class RigidMotion:
         t0 = time.perf_counter()
         con = self.body.constraint
         F0, M0 = self.F.copy(), self.M
-        if self.dt_prev > 0:
+        if self._end is not None:
+            (F1, M1), self._end = self._end, None
+        elif self.dt_prev > 0:
             F1 = F0 + (dt / self.dt_prev) * (F0 - self.F_last)
             M1 = M0 + (dt / self.dt_prev) * (M0 - self.M_last)
         else:
@@ -424,6 +442,14 @@ class RigidMotion:
         v = self.V + self.omega * perp
         a = self.A + self.alpha * perp - self.omega**2 * r
         return Surface(self.body.name, self.c + r, v, self.body.surface.facets, None, a)
+
+    def step_end_load(self) -> tuple[FloatArray, float]:
+        """The resultant and moment of the surface forces added since the last clear."""
+        return self.F.copy(), self.M
+
+    def set_step_end_load(self, load: tuple[FloatArray, float]) -> None:
+        """Use ``load`` (resultant, moment) at the end of the next step instead of the extrapolation."""
+        self._end = (np.asarray(load[0], dtype=float).copy(), float(load[1]))
 
     def add_forces(self, forces: FloatArray) -> None:
         r = self.nodes() - self.c

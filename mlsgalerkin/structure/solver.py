@@ -139,6 +139,15 @@ class StructureSolver(Solver):
             raise ValueError(f"structure body {body!r}: surface forces must have shape {expected}, got {f.shape}")
         m.add_forces(f)
 
+    def step_end_load(self, body: str):
+        """The surface load ``body`` received since the last clear (for a partitioned iteration)."""
+        return self._state.motions[body].step_end_load()
+
+    def set_step_end_load(self, body: str, load) -> None:
+        """Advance ``body`` in the next step with ``load`` (from :meth:`step_end_load`) at the step's
+        end: the structure's half of an implicit, partitioned coupling."""
+        self._state.motions[body].set_step_end_load(load)
+
     def clear_surface_forces(self) -> None:
         for m in self._state.motions.values():
             m.clear_forces()
