@@ -34,6 +34,7 @@ StructureCoupling(fluid='water', structure='gate', walls='gate_walls', contact=P
 
 from __future__ import annotations
 
+import time
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -116,6 +117,7 @@ class StructureCoupling(Interaction):
         self.crms = float("nan")
         self.passes: list[int] = []
         self.unconverged_steps = 0
+        self.seconds = {"walls": 0.0, "contact": 0.0, "reaction": 0.0}
 
     @property
     def iterates(self) -> bool:
@@ -170,6 +172,7 @@ class StructureCoupling(Interaction):
     # ------------------------------------------------------------------ per step
     def exchange(self, t: float, first: Solver, second: Solver) -> None:
         """Wall particles to the structure's surface at ``t``; penalty contact both ways."""
+        t0 = time.perf_counter()
         if self.walls is not None:
             surf = second.surface(self.second)
             fp = self._footprints
@@ -194,13 +197,17 @@ class StructureCoupling(Interaction):
                 self._previous = self._pending
             a = float(self.wall_acceleration) * a
             first.drive_walls(self.walls, t, x, v, a, n)
+        t1 = time.perf_counter()
         self.contact.exchange(t, first, second)
+        self.seconds["walls"] += t1 - t0
+        self.seconds["contact"] += time.perf_counter() - t1
 
     def after_step(self, t: float, first: Solver, second: Solver) -> None:
         """The fluid's reaction on the wall particles to the structure's surface nodes."""
         if self.walls is None:
             self._record(t)
             return
+        t0 = time.perf_counter()
         f_w = first.wall_reactions(self.walls)
         # the transpose of the map that placed them: each particle's force spread over the
         # surface nodes of its footprint (virtual work; the total is kept exactly)
@@ -209,6 +216,7 @@ class StructureCoupling(Interaction):
         np.add.at(per_point, point, f_w)
         second.add_surface_forces(self.second, self._footprints.average.T @ per_point)
         self.reaction = f_w.sum(axis=0)
+        self.seconds["reaction"] += time.perf_counter() - t0
         self._record(t)
 
     # ------------------------------------------------------------------ partitioned iteration
@@ -292,6 +300,7 @@ class StructureCoupling(Interaction):
                "wall_acceleration": self.wall_acceleration,
                "last_wall_reaction_N": self.reaction.tolist(), "last_contact_force_N": self.contact_force.tolist(),
                "peak_load_N": self.peak_load, "time_of_peak_load_s": self.time_of_peak_load,
+               "time_s": {k: round(v, 6) for k, v in self.seconds.items()},
                "contact": self.contact.summary()}
         if self.iterates:
             passes = np.asarray(self.passes) if self.passes else np.zeros(1)

@@ -41,6 +41,7 @@ __all__ = [
     "hydrostatic_density",
     "hydrostatic_pressure",
     "tait_density",
+    "tait_energy",
     "tait_pressure",
     "tait_sound_speed",
     "tait_stored_energy",
@@ -65,6 +66,14 @@ class MachNumberWarning(UserWarning):
 def tait_pressure(ratio: FloatArray, rho0: ArrayLike, c0: float, gamma: float = 7.0) -> FloatArray:
     """``p = B (r^γ − 1)`` (Pa) with ``B = (c0²/γ) ρ0`` per particle (``ρ0`` kg/m³, ``c0`` m/s)."""
     return (c0**2 / gamma * np.asarray(rho0)) * (ratio**gamma - 1.0)
+
+
+def tait_energy(ratio: FloatArray, rho0: ArrayLike, c0: float, gamma: float = 7.0) -> FloatArray:
+    """Specific compression energy ``e(ρ) = ∫_{ρ0}^{ρ} p/ρ'² dρ' = (B/ρ0)[(r^{γ−1} − 1)/(γ − 1) +
+    1/r − 1]`` (J/kg), ``r = ρ/ρ0``, ``B = ρ0 c0²/γ``: the work stored by compressing a unit mass
+    from ``ρ0`` (the tension's work below it), so that ``Σ M e`` closes the fluid's energy balance."""
+    r = np.asarray(ratio, dtype=float)
+    return (c0**2 / gamma) * ((r ** (gamma - 1.0) - 1.0) / (gamma - 1.0) + 1.0 / r - 1.0)
 
 
 def tait_sound_speed(ratio: FloatArray, c0: float, gamma: float = 7.0) -> FloatArray:
@@ -270,6 +279,7 @@ class TaitPressure(Effect):
                 np.maximum(p, 0.0, out=p)
         s.p[f] = p
         s.c[f] = tait_sound_speed(ratio, self.c0, self.gamma)
+        s.sensors["compression_energy"] = float(np.dot(s.M[f], tait_energy(ratio, s.rho0[f], self.c0, self.gamma)))
 
     def time_step_limit(self, s: FluidState) -> float:
         f = s.fluid

@@ -53,6 +53,8 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 from scipy.sparse.linalg import splu
 
+from skfem import Basis
+
 from mlsgalerkin.dynamics import Surface
 from mlsgalerkin.structure.elastic import ElasticBody
 from mlsgalerkin.structure.explicit import subcycle_linear
@@ -65,6 +67,9 @@ FloatArray = NDArray[np.float64]
 #: Fraction of the central-difference limit ``2/ω_max`` a sub-step takes (linear; the nonlinear
 #: models take 0.8 of it, their tangent stiffens under stretch).
 SUBSTEP_SAFETY = 0.9
+#: Quadrature order of the total-Lagrangian internal force (4: 3 × 3 Gauss points on a
+#: quadrilateral, 6 on a triangle).
+NONLINEAR_ORDER = 4
 #: A Newmark factorisation made for ``Δt'`` is reused for steps in ``[Δt'/NEWMARK_REUSE, Δt']``,
 #: and made for ``NEWMARK_MARGIN`` times the step that asks for a new one.
 NEWMARK_REUSE = 1.01
@@ -121,7 +126,9 @@ class ElasticMotion:
         if body.model != "linear":
             from mlsgalerkin.structure.hyperelastic import QuadratureData
 
-            self._quadrature = QuadratureData.from_basis(body.basis)
+            # 3 × 3 Gauss points per quadrilateral (scikit-fem's default for Q2 is 5 × 5, exact for the
+            # mass): the usual full integration of the internal force, 2.8 times fewer points
+            self._quadrature = QuadratureData.from_basis(Basis(body.mesh, body.basis.elem, intorder=NONLINEAR_ORDER))
             self._lame = body.material.lame()
 
     # ------------------------------------------------------------------ forces
