@@ -314,8 +314,10 @@ class TimeSeries(Monitor):
 
 
 class Frames(Monitor):
-    """VTU frames of every system (``particles.pvd`` for the fluid) at ``times`` or every
-    ``every`` simulated seconds (default: the start and the end), and at the end of the run."""
+    """VTU frames of every system (``particles.pvd`` for the fluid, ``structure.pvd`` for the
+    structures, with their meshes as cells) at ``times`` or every ``every`` simulated seconds
+    (default: the start and the end), and at the end of the run; with several systems also
+    ``frames.pvd``, one multiblock (``frames_*.vtm``) per frame time with a block per system."""
 
     name = "frames"
 
@@ -334,6 +336,7 @@ class Frames(Monitor):
         else:
             self.frame_times = [0.0, info.t_end]
         self._series = {}
+        self._out = info.out
         if info.out is None:
             return
         for key, system in state.systems.items():
@@ -348,8 +351,19 @@ class Frames(Monitor):
 
     def write(self, state: "RunState") -> None:
         for key, series in self._series.items():
-            points, data = state.systems[key].frame()
-            series.add(state.t, points, data)
+            system = state.systems[key]
+            points, data = system.frame()
+            cells = system.frame_cells() if hasattr(system, "frame_cells") else None
+            series.add(state.t, points, data, cells)
+        self._combine()
+
+    def _combine(self) -> None:
+        """With several systems (fluid and structures): ``frames.pvd`` over ``frames_*.vtm``, one
+        multiblock per frame time with a block per system, for ParaView to show them together."""
+        if len(self._series) > 1 and self._out is not None:
+            from mlsgalerkin.io import write_multiblock_series
+
+            write_multiblock_series(self._out, {getattr(s, "name", k): s for k, s in self._series.items()})
 
     def handle(self, state: "RunState", t: float) -> None:
         if not self._series:
@@ -368,8 +382,10 @@ class Frames(Monitor):
             return
         for key, series in self._series.items():
             if not series.frames or series.frames[-1][0] < state.t - TIME_TOLERANCE:
-                points, data = state.systems[key].frame()
-                series.add(state.t, points, data)
+                system = state.systems[key]
+                points, data = system.frame()
+                series.add(state.t, points, data, system.frame_cells() if hasattr(system, "frame_cells") else None)
+        self._combine()
 
     def summary(self) -> dict[str, Any]:
         return {"frames": {k: len(s.frames) for k, s in self._series.items()}} if self._series else {}

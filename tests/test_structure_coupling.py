@@ -157,3 +157,20 @@ def test_an_undamped_coupled_run_does_not_gain_energy():
     assert np.max(rise) < 2e-3 * scale
     n = rise.size
     assert abs(rise[2 * n // 3:].mean() - rise[n // 3: 2 * n // 3].mean()) < 2e-4 * scale
+
+
+def test_structure_frames_join_the_particles_in_one_series(tmp_path):
+    """A coupled run writes the structure's mesh (its cells) beside the particles, and
+    ``frames.pvd`` lists one multiblock per frame time with both."""
+    import meshio
+
+    from mlsgalerkin.io import read_pvd
+
+    mod = load_problem("hydrostatic_plate")
+    Simulation(mod.make_scene(mod.Parameters(dx=0.1, t_end=0.01, elements=10))).run(out=tmp_path, progress=False)
+    frames = read_pvd(tmp_path / "frames.pvd")
+    assert len(frames) == len(read_pvd(tmp_path / "particles.pvd")) == 2
+    text = frames[-1][1].read_text()
+    assert 'name="particles"' in text and 'name="structure"' in text
+    mesh = meshio.read(read_pvd(tmp_path / "structure.pvd")[-1][1])
+    assert [c.type for c in mesh.cells] == ["quad"] and len(mesh.cells[0].data) == 20

@@ -6,20 +6,25 @@ momentum-conserving, both every step:
 
 1. **Wall particles riding on the structure** (a :class:`~mlsgalerkin.fluid.bodies.WallBody`
    built by :meth:`~mlsgalerkin.fluid.bodies.WallBody.on_surface`, ``follows`` the structure).
-   Each sits on a segment ``(a, b)`` of the structure's wet surface at ``ξ`` and depth ``δ``:
+   They stand on points spread evenly along the structure's wet surface
+   (:func:`~mlsgalerkin.contact.surface.surface_points`), each point standing for a piece of
+   surface about one spacing long (its *footprint*), at depths ``δ`` behind it:
 
-   .. math:: \mathbf x_w = (1-\xi)\mathbf x_a + \xi\mathbf x_b - \delta\,\mathbf n,\quad
-             \mathbf v_w = (1-\xi)\mathbf v_a + \xi\mathbf v_b - \delta\,\dot{\mathbf n},\quad
-             \mathbf a_w = (1-\xi)\mathbf a_a + \xi\mathbf a_b,
+   .. math:: \mathbf x_w = \bar{\mathbf x}_p - \delta\,\mathbf n_p,\qquad
+             \mathbf v_w = \bar{\mathbf v}_p - \delta\,\dot{\mathbf n}_p,\qquad
+             \mathbf a_w = \bar{\mathbf a}_p,
 
-   set at the exchange of every step (``t + Δt``, the structure already advanced), so the
-   fluid's wall treatment (:class:`~mlsgalerkin.fluid.walls.Walls`) sees the surface's velocity
-   and acceleration (``g − a_w`` in the extrapolated wall pressure). They close the fluid's
-   nodal Galerkin sums at the structure as wall particles do at a fixed wall. Their reaction —
-   the nodal force of the fluid on them, :math:`\mathbf f_w = -\sum_k\sigma_k\nabla N_w(\mathbf
-   x_k)V_k` (the sums over all nodes add to zero, so this is exactly what the fluid lost) — goes
-   to the segment's nodes after the fluid's force evaluation (:meth:`after_step`):
-   :math:`\mathbf f_a \mathrel{+}= (1-\xi)\mathbf f_w`, :math:`\mathbf f_b \mathrel{+}= \xi\mathbf f_w`.
+   with :math:`\bar{(\cdot)}_p = \sum_a W_{pa}(\cdot)_a` the footprint mean over the surface
+   nodes ``a`` and :math:`\mathbf n_p` the normal of the footprint's chord. They are set at the
+   exchange of every step (``t + Δt``, the structure already advanced), with the structure's
+   mean velocity and acceleration over the step, so the fluid's wall treatment
+   (:class:`~mlsgalerkin.fluid.walls.Walls`) sees the surface move (and, with
+   ``wall_acceleration``, accelerate: ``g − a_w`` in the extrapolated wall pressure). They close
+   the fluid's nodal Galerkin sums at the structure as wall particles do at a fixed wall. Their
+   reaction — the nodal force of the fluid on them, :math:`\mathbf f_w = -\sum_k\sigma_k\nabla
+   N_w(\mathbf x_k)V_k` (the sums over all nodes add to zero, so this is exactly what the fluid
+   lost) — goes to the surface nodes after the fluid's force evaluation (:meth:`after_step`) by
+   the transpose of the same map, :math:`\mathbf f_a = \sum_w W_{p(w)a}\,\mathbf f_w`.
 2. **Node-to-surface penalty contact** of the fluid particles (slaves) on the structure's
    surface (master) — :class:`~mlsgalerkin.contact.PenaltyContact`: no particle passes
    through the structure, and the contact reactions go to the structure's surface nodes.
@@ -27,9 +32,14 @@ momentum-conserving, both every step:
 The coupling is explicit and staggered (the structure advances with the loads of the last step,
 then the fluid with the structure's new position); the loads of a step reach the structure in
 the next. The time step is the fluid's and the contact's (the structure sub-cycles inside it).
+With ``iterations > 1`` each step is repeated until the interface converges (the partitioned
+iteration with Aitken relaxation of ``docs/theory/fsi.md`` §3): the structure then advances with
+the fluid's load of the previous pass at the step's end, the riding particles take the relaxed
+interface ``x̃ ← x̃ + ω(x* − x̃)``, and the step is accepted when the CRMS of ``x* − x̃`` over the
+first layer falls below ``tolerance``.
 
 >>> StructureCoupling("water", "gate", walls="gate_walls", thickness=0.001)
-StructureCoupling(fluid='water', structure='gate', walls='gate_walls', contact=PenaltyContact(...))
+StructureCoupling(fluid='water', structure='gate', walls='gate_walls', wall_acceleration=0.0, iterations=1, ...)
 """
 
 from __future__ import annotations

@@ -61,7 +61,7 @@ from mlsgalerkin.io.render_fields import FieldStyle, register_field
 from mlsgalerkin.io.render_run import RenderError, render_frame, render_run
 from mlsgalerkin.io.render_timeseries import render_timeseries
 from mlsgalerkin.io.timeseries import TimeSeriesWriter, read_timeseries
-from mlsgalerkin.io.vtk import PVDSeries, read_pvd, read_vtu, write_vtu
+from mlsgalerkin.io.vtk import PVDSeries, read_pvd, read_vtu, write_multiblock_series, write_vtu
 
 __all__ = [
     "CHECKPOINT_FORMAT",
@@ -99,5 +99,6 @@ __all__ = [
     "to_jsonable",
     "write_csv_rows",
     "write_json",
+    "write_multiblock_series",
     "write_vtu",
 ]

@@ -46,7 +46,7 @@ import numpy as np
 
 from mlsgalerkin.io.files import atomic_output, atomic_write
 
-__all__ = ["PVDSeries", "pvd_xml", "read_pvd", "read_vtu", "write_vtu"]
+__all__ = ["PVDSeries", "pvd_xml", "read_pvd", "read_vtu", "vtm_xml", "write_multiblock_series", "write_vtu"]
 
 logger = logging.getLogger(__name__)
 
@@ -102,7 +102,8 @@ def _vtu_array(name: str, value: np.ndarray, n: int, d: int) -> np.ndarray:
 
 
 def write_vtu(
-    path: str | Path, points: np.ndarray, point_data: Mapping[str, np.ndarray] | None = None
+    path: str | Path, points: np.ndarray, point_data: Mapping[str, np.ndarray] | None = None,
+    cells: Sequence[tuple[str, np.ndarray]] | None = None,
 ) -> Path:
     """Write a particle point cloud as a VTU file (atomically) and return its path.
 
@@ -116,6 +117,9 @@ def write_vtu(
         Per-particle fields: scalars ``(n,)``, vectors ``(n, d)`` (padded to 3 components) or
         tensors ``(n, d, d)`` (flattened row-major to ``(n, d*d)``). ``bool`` is stored as
         ``uint8``. Units are the caller's (the file records none).
+    cells : list of (meshio cell type, (k, m) int array), optional
+        Cells on the points (``"quad"``, ``"triangle"``, ``"line"``: a structure's mesh); a point
+        cloud of ``vertex`` cells without them.
 
     Returns
     -------
@@ -134,9 +138,11 @@ def write_vtu(
         data[name] = _vtu_array(name, value, n, d)
     if d == 2:
         pts = np.concatenate([pts, np.zeros((n, 1))], axis=1)
+    blocks = [("vertex", np.arange(n, dtype=np.int64).reshape(n, 1))] if not cells else \
+        [(kind, np.ascontiguousarray(np.asarray(c, dtype=np.int64))) for kind, c in cells]
     mesh = meshio.Mesh(
         np.ascontiguousarray(pts),
-        [("vertex", np.arange(n, dtype=np.int64).reshape(n, 1))],
+        blocks,
         point_data={k: np.ascontiguousarray(v) for k, v in data.items()},
     )
     with atomic_output(path) as tmp:
@@ -254,6 +260,7 @@ class PVDSeries:
         time: float,
         points: np.ndarray,
         point_data: Mapping[str, np.ndarray] | None = None,
+        cells: Sequence[tuple[str, np.ndarray]] | None = None,
     ) -> Path:
         """Write the next frame and rewrite the ``.pvd`` (both atomically).
 
@@ -261,7 +268,7 @@ class PVDSeries:
         ----------
         time : float
             Simulation time [s]; finite and greater than the previous frame's.
-        points, point_data
+        points, point_data, cells
             As for :func:`write_vtu`.
 
         Returns
@@ -279,7 +286,7 @@ class PVDSeries:
                 "PVDSeries.resume(directory, name, after_time=restart_time))"
             )
         self.directory.mkdir(parents=True, exist_ok=True)
-        path = write_vtu(self.frame_path(self._next_index), points, point_data)
+        path = write_vtu(self.frame_path(self._next_index), points, point_data, cells)
         self._frames.append((t, path))
         self._next_index += 1
         self._write_pvd()
@@ -321,3 +328,32 @@ class PVDSeries:
             logger.info("resuming %s: dropped %d frame(s) after t = %r",
                         series.pvd_path, len(listed) - len(kept), after_time)
         return series
+
+
+def vtm_xml(blocks: Sequence[tuple[str, str]]) -> str:
+    """A VTK multiblock (``.vtm``) file listing ``(block name, relative .vtu file)`` blocks."""
+    lines = ['<?xml version="1.0"?>', '<VTKFile type="vtkMultiBlockDataSet" version="1.0" byte_order="LittleEndian">',
+             "  <vtkMultiBlockDataSet>"]
+    for k, (name, file) in enumerate(blocks):
+        lines.append(f"    <DataSet index={quoteattr(str(k))} name={quoteattr(name)} file={quoteattr(file)}/>")
+    lines += ["  </vtkMultiBlockDataSet>", "</VTKFile>", ""]
+    return "\n".join(lines)
+
+
+def write_multiblock_series(directory: str | Path, series: Mapping[str, PVDSeries], name: str = "frames") -> Path:
+    """One series of several systems' frames: ``{name}_{index:05d}.vtm`` per frame time, a block
+    per series (the particles, the structures), and ``{name}.pvd`` listing them (ParaView opens
+    it as one time series). Frames are matched by time; rewritten atomically; returns the ``.pvd``."""
+    directory = Path(directory)
+    times: dict[float, list[tuple[str, str]]] = {}
+    for block, s in series.items():
+        for t, p in s.frames:
+            times.setdefault(round(float(t), 12), []).append((block, p.name))
+    entries = []
+    for k, (t, blocks) in enumerate(sorted(times.items())):
+        file = f"{name}_{k:05d}.vtm"
+        atomic_write(directory / file, vtm_xml(blocks))
+        entries.append((t, file))
+    pvd = directory / f"{name}.pvd"
+    atomic_write(pvd, pvd_xml(entries))
+    return pvd

@@ -1,7 +1,8 @@
 r"""Elastic bodies on scikit-fem: stiffness, lumped mass, clamped facets, the wet surface, and the
 body's options in a run (model, integrator, weight, damping, named points).
 
-The body is a scikit-fem mesh with a vector element (Q1, 9-node Q2 or P1 in 2D). scikit-fem
+The body is a scikit-fem mesh with a vector element: Q1, 9-node Q2 or P1 in 2D; Hex1, 27-node Hex2
+or P1 (tetrahedra) in 3D, with the same API. scikit-fem
 assembles everything once:
 
 .. math:: K = \int_\Omega \boldsymbol\varepsilon(\mathbf v) : \mathbb C : \boldsymbol\varepsilon(\mathbf u)\,d\Omega,
@@ -9,7 +10,8 @@ assembles everything once:
           \qquad \mathbf f_g = \int_\Omega \rho_s\,\mathbf g\cdot\phi_i\,d\Omega
 
 (``skfem.models.elasticity.linear_elasticity`` with the Lamé parameters; the row-sum lumped mass,
-positive for Q1, 9-node Q2 and P1, not for serendipity elements; the weight ``f_g`` if the body
+positive for Q1, 9-node Q2, P1, Hex1, 27-node Hex2 and tetrahedral P1, not for serendipity
+elements; the weight ``f_g`` if the body
 has ``gravity``). In plane stress the first Lamé parameter is replaced by
 :math:`2\lambda\mu/(\lambda + 2\mu)`. Clamped degrees of freedom come from a facet predicate
 (``basis.get_dofs``). Units: m, kg, s, N (per unit depth in 2D), Pa.
@@ -18,9 +20,9 @@ A run advances the body with the :class:`~mlsgalerkin.structure.solver.Structure
 explicit central differences sub-cycled inside the fluid's step (linear or a total-Lagrangian
 nonlinear model, :mod:`mlsgalerkin.structure.hyperelastic`), or implicit Newmark (linear). The
 fluid touches the body on its *wet surface*: the boundary facets chosen by ``wet``, as straight
-segments between the facet's nodes (vertices, and the mid-side node of a Q2 facet), oriented
-from the owning element (scikit-fem sorts facet nodes) so that the normal points out of the
-body.
+segments between the facet's nodes (vertices, and the mid-side node of a Q2 facet) in 2D, as
+triangles on the facet's vertices in 3D (a quadrilateral facet split in two), oriented from the
+owning element (scikit-fem sorts facet nodes) so that the normal points out of the body.
 
 >>> from skfem import MeshQuad
 >>> mesh = MeshQuad.init_tensor(np.linspace(0, 0.3, 7), np.linspace(0, 0.006, 2))
@@ -43,8 +45,11 @@ from numpy.typing import ArrayLike, NDArray
 from skfem import (
     Basis,
     BilinearForm,
+    ElementHex1,
+    ElementHex2,
     ElementQuad1,
     ElementQuad2,
+    ElementTetP1,
     ElementTriP1,
     ElementVector,
     FacetBasis,
@@ -60,7 +65,7 @@ from skfem.models.elasticity import lame_parameters, linear_elasticity
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.dynamics import Body
 
-__all__ = ["ELEMENTS", "INTEGRATORS", "MODELS", "STRUCTURE_SOLVER", "ElasticBody", "ElasticMaterial", "WetSurface"]
+__all__ = ["ELEMENTS", "ELEMENTS_3D", "INTEGRATORS", "MODELS", "STRUCTURE_SOLVER", "ElasticBody", "ElasticMaterial", "WetSurface"]
 
 FloatArray = NDArray[np.float64]
 Predicate = Callable[[FloatArray], FloatArray]
@@ -69,6 +74,8 @@ Predicate = Callable[[FloatArray], FloatArray]
 STRUCTURE_SOLVER = "mlsgalerkin.structure.solver:StructureSolver"
 #: The 2D elements with a positive row-sum lumped mass, by name.
 ELEMENTS = {"Q1": ElementQuad1, "Q2": ElementQuad2, "P1": ElementTriP1}
+#: The 3D elements with a positive row-sum lumped mass, by name.
+ELEMENTS_3D = {"Hex1": ElementHex1, "Hex2": ElementHex2, "P1": ElementTetP1}
 #: Material models: small-strain linear elasticity and two total-Lagrangian hyperelastic models.
 MODELS = ("linear", "stvenant_kirchhoff", "neo_hookean")
 #: Time integrators: explicit central differences (sub-cycled) and implicit Newmark (linear only).
@@ -95,11 +102,16 @@ class ElasticMaterial:
             raise ValueError(f"ElasticMaterial: plane must be 'strain' or 'stress', got {self.plane!r}")
 
     def lame(self) -> tuple[float, float]:
-        """``(λ, μ)`` in Pa, with the plane-stress ``λ`` when ``plane == "stress"``."""
+        """``(λ, μ)`` in Pa, with the plane-stress ``λ`` when ``plane == "stress"`` (2D bodies; a 3D
+        body uses :meth:`lame3d`)."""
         lam, mu = lame_parameters(self.young, self.poisson)
         if self.plane == "stress":
             lam = 2.0 * lam * mu / (lam + 2.0 * mu)
         return lam, mu
+
+    def lame3d(self) -> tuple[float, float]:
+        """``(λ, μ)`` in Pa of the 3D material (``plane`` does not apply)."""
+        return lame_parameters(self.young, self.poisson)
 
     def wave_speed(self) -> float:
         """Dilatational wave speed ``sqrt((λ + 2μ)/ρ)`` (m/s) of the 2D model."""
@@ -113,13 +125,14 @@ class WetSurface:
 
     Attributes
     ----------
-    dofs : (m, 2) int array
-        The two vector degrees of freedom of each surface node.
-    reference : (m, 2) float array
+    dofs : (m, d) int array
+        The ``d`` vector degrees of freedom of each surface node.
+    reference : (m, d) float array
         Node positions at rest (m).
-    segments : (k, 2) int array
-        Surface node indices of each segment, ordered so that the normal (the segment direction
-        turned clockwise) points out of the body.
+    segments : (k, d) int array
+        Surface node indices of each facet — 2D segments, 3D triangles — ordered so that the
+        normal (2D: the segment direction turned clockwise; 3D: counter-clockwise seen from
+        outside) points out of the body.
     """
 
     dofs: NDArray[np.int64]
@@ -137,8 +150,11 @@ class WetSurface:
 
 
 def wet_surface(basis: Basis, facets: NDArray[np.int64]) -> WetSurface:
-    """The oriented segments of the boundary ``facets`` of a 2D vector ``basis`` (vertices, and
-    the mid-side node of a quadratic facet; see :class:`WetSurface`)."""
+    """The oriented facets of the boundary ``facets`` of a vector ``basis``: 2D segments (vertices,
+    and the mid-side node of a quadratic facet), 3D triangles on the vertices (see
+    :class:`WetSurface`)."""
+    if basis.mesh.p.shape[0] == 3:
+        return _wet_surface_3d(basis, facets)
     mesh = basis.mesh
     ends = mesh.facets[:, facets].T.copy()                       # (k, 2) sorted vertex pairs
     owner = mesh.f2t[0, facets]
@@ -165,19 +181,54 @@ def wet_surface(basis: Basis, facets: NDArray[np.int64]) -> WetSurface:
     return WetSurface(dofs.astype(np.int64), reference, local.reshape(-1, 2).astype(np.int64))
 
 
+def _wet_surface_3d(basis: Basis, facets: NDArray[np.int64]) -> WetSurface:
+    """Triangles on the vertices of 3D boundary facets, counter-clockwise seen from outside."""
+    mesh = basis.mesh
+    verts = mesh.facets[:, facets].T                              # (k, 3 or 4) sorted vertex indices
+    owner = mesh.f2t[0, facets]
+    centre = mesh.p[:, mesh.t[:, owner]].mean(axis=1).T           # (k, 3) owning element centroids
+    tris = []
+    for f in range(verts.shape[0]):
+        v = verts[f]
+        x = mesh.p[:, v].T
+        c = x.mean(axis=0)
+        if v.size == 4:                                           # order the quadrilateral around its centre
+            n0 = np.cross(x[1] - x[0], x[2] - x[0])
+            if np.linalg.norm(n0) < 1e-14 * np.ptp(x):
+                n0 = np.cross(x[1] - x[0], x[3] - x[0])
+            e1 = (x[0] - c) / np.linalg.norm(x[0] - c)
+            e2 = np.cross(n0 / np.linalg.norm(n0), e1)
+            order = np.argsort(np.arctan2((x - c) @ e2, (x - c) @ e1))
+            v, x = v[order], x[order]
+            pieces = [[v[0], v[1], v[2]], [v[0], v[2], v[3]]]
+        else:
+            pieces = [list(v)]
+        normal = np.cross(x[1] - x[0], x[2] - x[0])
+        flip = float(normal @ (c - centre[f])) < 0
+        tris += [[p[0], p[2], p[1]] if flip else p for p in pieces]
+    tris = np.array(tris, dtype=np.int64)
+    vertices, local = np.unique(tris, return_inverse=True)
+    first = basis.nodal_dofs[0, vertices]
+    dofs = np.stack([basis.nodal_dofs[c, vertices] for c in range(3)], axis=1)
+    reference = basis.doflocs[:, first].T.copy()
+    return WetSurface(dofs.astype(np.int64), reference, local.reshape(-1, 3).astype(np.int64))
+
+
 class ElasticBody(Body):
-    """An elastic body on the scikit-fem ``mesh`` (2D) with element ``element`` (``"Q1"``,
-    ``"Q2"`` or ``"P1"``).
+    """An elastic body on the scikit-fem ``mesh`` with element ``element``: ``"Q1"``, ``"Q2"`` or
+    ``"P1"`` in 2D, ``"Hex1"``, ``"Hex2"`` or ``"P1"`` in 3D.
 
     Parameters
     ----------
     name : str
     mesh : skfem.Mesh
-        A 2D mesh (``MeshQuad`` for Q1/Q2, ``MeshTri`` for P1), in m, at rest.
+        A 2D mesh (``MeshQuad`` for Q1/Q2, ``MeshTri`` for P1) or a 3D one (``MeshHex`` for
+        Hex1/Hex2, ``MeshTet`` for P1), in m, at rest. In 3D the material's ``plane`` does not
+        apply, and the model is linear.
     material : ElasticMaterial
     element : str
     clamped : callable, optional
-        ``clamped(x) -> bool array`` on facet midpoints ``x (2, n)``: the boundary facets whose
+        ``clamped(x) -> bool array`` on facet midpoints ``x (d, n)``: the boundary facets whose
         degrees of freedom are held at zero.
     wet : callable, optional
         The boundary facets the fluid may touch (same form); default all boundary facets.
@@ -187,7 +238,7 @@ class ElasticBody(Body):
     integrator : str
         ``"explicit"`` (central differences, sub-cycled inside the outer step) or ``"newmark"``
         (implicit average acceleration, linear model only; one step per outer step).
-    gravity : (2,) array, optional
+    gravity : (d,) array, optional
         Acceleration of gravity on the body (m/s²), e.g. ``(0, -9.81)``; none by default.
     damping : (float, float)
         Rayleigh damping ``C = a0 M + a1 K`` (1/s, s); none by default.
@@ -196,7 +247,7 @@ class ElasticBody(Body):
         this damping ratio (``a1 = 2ξ/ω_max``; default 0.5). It keeps the stiff modes a coupled
         run cannot resolve from ringing at the wet surface (measured necessary on the plate under
         water); its damping ratio at the first mode, ``ξ ω₁/ω_max``, is in ``summary.json``.
-    points : dict of str to (2,) point, optional
+    points : dict of str to (d,) point, optional
         Named material points (m, at rest) whose displacement is recorded every step as the
         time-series columns ``<name>_<point>_ux`` and ``_uy``.
     """
@@ -209,10 +260,16 @@ class ElasticBody(Body):
                  damping: tuple[float, float] = (0.0, 0.0), high_mode_damping: float = 0.5,
                  points: dict[str, ArrayLike] | None = None) -> None:
         owner = f"ElasticBody {name!r}"
-        if element not in ELEMENTS:
-            raise ValueError(f"{owner}: element must be one of {sorted(ELEMENTS)}, got {element!r}")
-        if not isinstance(mesh, Mesh) or mesh.p.shape[0] != 2:
-            raise ValueError(f"{owner}: mesh must be a 2D scikit-fem mesh (MeshQuad, MeshTri), got {type(mesh).__name__}")
+        if not isinstance(mesh, Mesh) or mesh.p.shape[0] not in (2, 3):
+            raise ValueError(f"{owner}: mesh must be a 2D or 3D scikit-fem mesh (MeshQuad, MeshTri, MeshHex, MeshTet), "
+                             f"got {type(mesh).__name__}")
+        d = mesh.p.shape[0]
+        table = ELEMENTS if d == 2 else ELEMENTS_3D
+        if element not in table:
+            raise ValueError(f"{owner}: element must be one of {sorted(table)} for a {d}D mesh, got {element!r}")
+        if d == 3 and model != "linear":
+            raise ValueError(f"{owner}: the nonlinear models are 2D (plane strain); a 3D body is linear "
+                             "(model='linear')")
         if not isinstance(material, ElasticMaterial):
             raise TypeError(f"{owner}: material must be an ElasticMaterial, got {type(material).__name__}")
         if model not in MODELS:
@@ -222,7 +279,7 @@ class ElasticBody(Body):
         if model != "linear" and integrator != "explicit":
             raise ValueError(f"{owner}: the nonlinear model {model!r} runs with the explicit integrator only; "
                              "use integrator='explicit' (or model='linear' for Newmark)")
-        if model != "linear" and material.plane != "strain":
+        if model != "linear" and d == 2 and material.plane != "strain":
             raise ValueError(f"{owner}: the nonlinear model {model!r} is plane strain; use ElasticMaterial(..., "
                              "plane='strain') (plane stress needs the thickness change, which it does not model)")
         if not (isinstance(high_mode_damping, (int, float)) and 0.0 <= high_mode_damping <= 1.0):
@@ -235,10 +292,10 @@ class ElasticBody(Body):
         self.name, self.mesh, self.material, self.element = name, mesh, material, element
         self.model, self.integrator, self.damping = model, integrator, (a0, a1)
         self.gravity = None if gravity is None else np.asarray(gravity, dtype=float)
-        if self.gravity is not None and self.gravity.shape != (2,):
-            raise ValueError(f"{owner}: gravity must be a (2,) vector (m/s²), got shape {self.gravity.shape}")
-        self.basis = Basis(mesh, ElementVector(ELEMENTS[element]()))
-        lam, mu = material.lame()
+        if self.gravity is not None and self.gravity.shape != (d,):
+            raise ValueError(f"{owner}: gravity must be a ({d},) vector (m/s²), got shape {self.gravity.shape}")
+        self.basis = Basis(mesh, ElementVector(table[element]()))
+        lam, mu = material.lame() if d == 2 else material.lame3d()
         self.stiffness = asm(linear_elasticity(lam, mu), self.basis).tocsr()
         rho = material.density
 
@@ -265,14 +322,14 @@ class ElasticBody(Body):
 
             @LinearForm
             def body_force(v, w):
-                return rho * (g[0] * v[0] + g[1] * v[1])
+                return rho * sum(g[c] * v[c] for c in range(d))
 
             self.weight = asm(body_force, self.basis)
         self.points: dict[str, FloatArray] = {}
         for key, p in (points or {}).items():
             q = np.asarray(p, dtype=float)
-            if q.shape != (2,) or not np.all(np.isfinite(q)):
-                raise ValueError(f"{owner}: point {key!r} must be a finite (2,) position, got {p!r}")
+            if q.shape != (d,) or not np.all(np.isfinite(q)):
+                raise ValueError(f"{owner}: point {key!r} must be a finite ({d},) position, got {p!r}")
             self.points[key] = q
         self._probes = None
         if self.points:
@@ -286,7 +343,7 @@ class ElasticBody(Body):
 
     @property
     def dim(self) -> int:
-        return 2
+        return int(self.mesh.p.shape[0])
 
     @property
     def n_dofs(self) -> int:
@@ -302,7 +359,7 @@ class ElasticBody(Body):
                 f"high_mode_damping={self.high_mode_damping!r})")
 
     # ------------------------------------------------------------------ loads
-    def edge_traction(self, facets: Predicate, traction: tuple[float, float]) -> FloatArray:
+    def edge_traction(self, facets: Predicate, traction: tuple[float, ...]) -> FloatArray:
         """Nodal forces ``(N,)`` of a uniform traction ``traction`` (Pa) on the boundary facets
         where ``facets(x)`` is true: ``f_i = ∫ t · φ_i ds``."""
         fb = FacetBasis(self.mesh, self.basis.elem, facets=self.mesh.facets_satisfying(facets, boundaries_only=True))
@@ -310,7 +367,7 @@ class ElasticBody(Body):
 
         @LinearForm
         def load(v, w):
-            return t[0] * v[0] + t[1] * v[1]
+            return sum(t[c] * v[c] for c in range(t.size))
 
         return asm(load, fb)
 
@@ -320,20 +377,20 @@ class ElasticBody(Body):
         return solve(*condense(self.stiffness, f, D=self.clamped_dofs))
 
     def displacement_at(self, points: FloatArray, u: FloatArray | None = None) -> FloatArray:
-        """Displacement ``(n, 2)`` at ``points (2, n)`` (m) interpolated with the element's shape functions."""
+        """Displacement ``(n, d)`` at ``points (d, n)`` (m) interpolated with the element's shape functions."""
         u = self.u if u is None else u
         P = self.basis.probes(np.asarray(points, dtype=float))
-        return (P @ u).reshape(2, -1).T
+        return (P @ u).reshape(self.dim, -1).T
 
     def point_displacements(self, u: FloatArray) -> dict[str, FloatArray]:
-        """Displacement ``(2,)`` (m) of each named point."""
+        """Displacement ``(d,)`` (m) of each named point."""
         if self._probes is None:
             return {}
-        d = (self._probes @ u).reshape(2, -1)
+        d = (self._probes @ u).reshape(self.dim, -1)
         return {k: d[:, i] for i, k in enumerate(self.points)}
 
     def vertex_displacement(self, vertices: NDArray[np.int64], u: FloatArray | None = None) -> FloatArray:
-        """Displacement ``(k, 2)`` (m) of the mesh vertices ``vertices`` (their nodal degrees of freedom)."""
+        """Displacement ``(k, d)`` (m) of the mesh vertices ``vertices`` (their nodal degrees of freedom)."""
         u = self.u if u is None else u
         return u[self.basis.nodal_dofs[:, vertices]].T
 

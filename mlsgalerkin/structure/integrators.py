@@ -275,9 +275,13 @@ class ElasticMotion:
 
     def observables(self) -> dict[str, float]:
         row = self.energies()
-        row["force_x"], row["force_y"] = float(self.f[0::2].sum()), float(self.f[1::2].sum())
+        dim = self.body.dim
+        total = self.f.reshape(-1, dim).sum(axis=0)
+        for c in range(dim):
+            row[f"force_{'xyz'[c]}"] = float(total[c])
         for key, d in self.body.point_displacements(self.u).items():
-            row[f"{key}_ux"], row[f"{key}_uy"] = float(d[0]), float(d[1])
+            for c in range(dim):
+                row[f"{key}_u{'xyz'[c]}"] = float(d[c])
         return row
 
     def frame(self) -> tuple[FloatArray, dict[str, FloatArray]]:
@@ -285,6 +289,14 @@ class ElasticMotion:
         loc = b.basis.doflocs[:, b.basis.nodal_dofs[0]].T
         dofs = b.basis.nodal_dofs.T
         return loc + self.u[dofs], {"displacement": self.u[dofs], "velocity": self.v[dofs]}
+
+    def frame_cells(self) -> tuple[str, NDArray[np.int64]]:
+        """The mesh's cells on :meth:`frame`'s points (the vertices), in VTK's node order
+        (scikit-fem's meshio conversion)."""
+        from skfem.io.meshio import to_meshio
+
+        block = to_meshio(self.body.mesh).cells[0]
+        return block.type, np.asarray(block.data, dtype=np.int64)
 
     def finite(self) -> bool:
         return bool(np.all(np.isfinite(self.u)) and np.all(np.isfinite(self.v)))
@@ -491,6 +503,10 @@ class RigidMotion:
     def frame(self) -> tuple[FloatArray, dict[str, FloatArray]]:
         x = self.nodes()
         return x, {"displacement": x - self.X, "velocity": self.surface().velocities}
+
+    def frame_cells(self) -> tuple[str, NDArray[np.int64]]:
+        """The surface segments on :meth:`frame`'s points (the surface nodes)."""
+        return "line", self.body.surface.facets.astype(np.int64)
 
     def finite(self) -> bool:
         return bool(np.all(np.isfinite(self.c)) and math.isfinite(self.theta) and math.isfinite(self.omega))

@@ -75,6 +75,16 @@ class StructureState:
         data["body"] = np.concatenate([np.full(p.shape[0], i, dtype=np.int32) for i, p, _ in parts])
         return points, data
 
+    def frame_cells(self) -> list[tuple[str, np.ndarray]]:
+        """The cells on :meth:`frame`'s points: each elastic body's mesh (``quad`` or ``triangle``
+        on its vertices), each rigid body's surface segments (``line``)."""
+        out, offset = [], 0
+        for m in self.motions.values():
+            kind, cells = m.frame_cells()
+            out.append((kind, cells + offset))
+            offset += m.frame()[0].shape[0]
+        return out
+
     def health(self, limits: Any) -> dict | None:
         for name, m in self.motions.items():
             if not m.finite():
@@ -134,7 +144,7 @@ class StructureSolver(Solver):
     def add_surface_forces(self, body: str, forces: np.ndarray) -> None:
         m = self._state.motions[body]
         f = np.asarray(forces, dtype=float)
-        expected = (m.n_surface, 2)
+        expected = (m.n_surface, m.body.dim)
         if f.shape != expected:
             raise ValueError(f"structure body {body!r}: surface forces must have shape {expected}, got {f.shape}")
         m.add_forces(f)
