@@ -47,6 +47,7 @@ __all__ = [
     "PreparedProblem",
     "ProblemError",
     "load_problem",
+    "numerical_dissipation",
     "origin_of",
     "parameter_help",
     "parameter_table",
@@ -192,6 +193,17 @@ def require_nonnegative(params: Any, *names: str) -> list[str]:
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
             out.append(f"parameter {name} must be a number >= 0, got {v!r}")
     return out
+
+
+def numerical_dissipation(result: Any, speed: float, length: float) -> dict[str, float | None]:
+    """The artificial viscosity a run carried and the Reynolds number it implies for a flow of
+    ``speed`` (m/s) over ``length`` (m): ``{"numerical_viscosity_m2_per_s": ν,
+    "numerical_reynolds_number": U L/ν}`` from the run's ``summary.json`` (``None`` without
+    Monaghan viscosity), for a problem's analysis to report beside its errors."""
+    reports = ((getattr(result, "summary", None) or {}).get("fluid") or {}).get("effect_reports") or {}
+    nu = (reports.get("monaghan_viscosity") or {}).get("numerical_viscosity_m2_per_s")
+    return {"numerical_viscosity_m2_per_s": nu,
+            "numerical_reynolds_number": speed * length / nu if nu else None}
 
 
 def _finite_problems(params: Any) -> list[str]:

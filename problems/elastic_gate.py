@@ -40,7 +40,7 @@ from mlsgalerkin.fluid import (
     hydrostatic_density, lattice, stabilisation, wall_box,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
-from mlsgalerkin.problem import require, require_nonnegative, require_positive
+from mlsgalerkin.problem import numerical_dissipation, require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial
 
@@ -155,6 +155,7 @@ def analyse(result, p: Parameters) -> dict:
     out["reference_tip_x_peak_m"], out["reference_tip_x_peak_time_s"] = float(rx[kx, 1]), float(rx[kx, 0])
     out["tip_x_peak_error"] = out["tip_x_peak_m"] / out["reference_tip_x_peak_m"] - 1.0
     out["tip_x_peak_time_error_s"] = out["tip_x_peak_time_s"] - out["reference_tip_x_peak_time_s"]
+    out.update(numerical_dissipation(result, math.sqrt(2.0 * p.g * p.column_height), p.column_height))
     out["headline"] = (f"tip_x peak {1e3 * out['tip_x_peak_m']:.1f} mm at {out['tip_x_peak_time_s']:.3f} s vs "
                        f"{1e3 * out['reference_tip_x_peak_m']:.1f} mm at {out['reference_tip_x_peak_time_s']:.3f} s "
                        f"({100 * out['tip_x_peak_error']:+.1f} %, {out['tip_x_peak_time_error_s']:+.3f} s); "

@@ -38,7 +38,7 @@ from mlsgalerkin.fluid import (
     hydrostatic_density, stabilisation, wall_box,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
-from mlsgalerkin.problem import require, require_nonnegative, require_positive
+from mlsgalerkin.problem import numerical_dissipation, require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
 from mlsgalerkin.structure import RigidBody
 
@@ -142,6 +142,7 @@ def analyse(result, p: Parameters) -> dict:
     }
     out["force_peak_error"] = out["force_peak_N"] / out["reference_force_peak_N"] - 1.0
     out["force_peak_time_error_s"] = out["force_peak_time_s"] - out["reference_force_peak_time_s"]
+    out.update(numerical_dissipation(result, p.velocity, 0.5 * p.breadth))
     out["headline"] = (f"velocity within {100 * out['velocity_max_error']:.2f} %; peak force {out['force_peak_N']:.0f} N "
                        f"at {1e3 * out['force_peak_time_s']:.1f} ms vs {out['reference_force_peak_N']:.0f} N at "
                        f"{1e3 * out['reference_force_peak_time_s']:.1f} ms ({100 * out['force_peak_error']:+.1f} %, "
