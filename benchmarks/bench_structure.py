@@ -82,7 +82,7 @@ def coupled(rows: list[str], steps: int) -> None:
 
     cases = [("hydrostatic_plate", {"dx": 0.025}), ("elastic_gate", {"dx": 0.002}), ("wedge_drop", {"dx": 0.01}),
              ("beam_clamped", {"dx": 0.004}), ("beam_on_spring", {"dx": 0.015})]
-    rows += ["", f"## 3. Coupled steps ({steps} steps from the start; the wedge from its impact)", "",
+    rows += ["", f"## 3. Coupled steps ({steps} steps from the start)", "",
              "| problem | particles | structure | sub-steps per step | ms per step | fluid | structure | coupling: walls | "
              "contact | reaction | contact / fluid step |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for problem, overrides in cases:
