@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_neighbors import measure, provenance_line  # noqa: E402
+from bench_neighbors import measure, provenance_line
 
 
 def subcycles(rows: list[str]) -> None:
@@ -61,7 +61,11 @@ def subcycles(rows: list[str]) -> None:
 
 def nonlinear(rows: list[str]) -> None:
     from mlsgalerkin.problem import load_problem
-    from mlsgalerkin.structure.hyperelastic import QuadratureData, internal_force, internal_force_reference
+    from mlsgalerkin.structure.hyperelastic import (
+        QuadratureData,
+        internal_force,
+        internal_force_reference,
+    )
 
     mod = load_problem("elastic_gate")
     gate = mod._gate(mod.Parameters())
@@ -110,7 +114,7 @@ def coupled(rows: list[str], steps: int) -> None:
         body = next(iter(structure.summary()["bodies"].values()))
         sub = body.get("substeps_per_step_mean") or body["substeps"] / max(body["outer_steps"], 1)
         kind = body["kind"] + (f" {body['integrator']}" if body["kind"] == "elastic" else "")
-        share = lambda x: f"{100 * x / wall:.1f} %"  # noqa: E731
+        share = lambda x: f"{100 * x / wall:.1f} %"
         rows.append(f"| {problem} | {fluid.state.n} | {kind} | {sub:.1f} | {1e3 * wall / steps:.2f} | {share(f)} | "
                     f"{share(s)} | {share(c['walls'])} | {share(c['contact'])} | {share(c['reaction'])} | "
                     f"{c['contact'] / max(f, 1e-12):.3f} |")

@@ -49,7 +49,7 @@ def test_a_3d_water_block_lands_on_a_clamped_plate():
     the plate and pushes the plate down."""
     dx = 0.01
     mesh = MeshHex.init_tensor(np.linspace(0, 0.2, 9), np.linspace(0, 0.2, 9), np.linspace(-0.01, 0.0, 2))
-    edge = lambda x: np.isclose(x[0], 0) | np.isclose(x[0], 0.2) | np.isclose(x[1], 0) | np.isclose(x[1], 0.2)  # noqa: E731
+    edge = lambda x: np.isclose(x[0], 0) | np.isclose(x[0], 0.2) | np.isclose(x[1], 0) | np.isclose(x[1], 0.2)
     plate = ElasticBody("plate", mesh, ElasticMaterial(1e7, 0.3, 1000.0), "Hex1", clamped=edge,
                         wet=lambda x: np.isclose(x[2], 0.0), points={"mid": (0.1, 0.1, -0.005)})
     water = FluidBody.block("water", (0.07, 0.07, 0.005), (0.13, 0.13, 0.065), dx, [Phase("water", 1000.0)])

@@ -27,7 +27,7 @@ from mlsgalerkin.io import atomic_write, read_timeseries
 from mlsgalerkin.problem import load_problem
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from verification.fluid_core import runner, write_table  # noqa: E402
+from verification.fluid_core import runner, write_table
 
 SECTIONS = ("plate", "gate", "wedge", "clamped", "spring")
 REPORT = "structure"

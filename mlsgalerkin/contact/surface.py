@@ -24,9 +24,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import scipy.sparse as sp
-
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = ["ContactSurface", "SurfacePoints", "surface_chains", "surface_points"]
@@ -120,13 +119,13 @@ class ContactSurface:
         return f"ContactSurface({self.dim}D, {self.n_nodes} nodes, {self.n_facets} {kind})"
 
     # ------------------------------------------------------------------ orientation
-    def flipped(self) -> "ContactSurface":
+    def flipped(self) -> ContactSurface:
         """The same facets with the opposite orientation (normals reversed)."""
         f = self.facets.copy()
         f[:, [0, 1]] = f[:, [1, 0]]
         return ContactSurface(self.nodes, f)
 
-    def oriented(self, point: ArrayLike, *, toward: bool = False) -> "ContactSurface":
+    def oriented(self, point: ArrayLike, *, toward: bool = False) -> ContactSurface:
         """Each facet turned so that its normal points away from ``point`` (a point inside the
         body: ``toward=False``) or toward it (a point in the region the slaves fill, e.g. inside
         a tank: ``toward=True``). Decided per facet by the sign of ``(centroid − point)·n``, so
@@ -142,7 +141,7 @@ class ContactSurface:
 
     # ------------------------------------------------------------------ constructors
     @classmethod
-    def polyline(cls, points: ArrayLike, closed: bool = False) -> "ContactSurface":
+    def polyline(cls, points: ArrayLike, closed: bool = False) -> ContactSurface:
         """2D segments joining consecutive ``points (m, 2)`` (and the last to the first if
         ``closed``). Each normal is its segment's direction turned clockwise: walking along the
         points, the touchable side is on the right. A closed polygon listed clockwise therefore
@@ -159,7 +158,7 @@ class ContactSurface:
         return cls(x, facets)
 
     @classmethod
-    def tank(cls, lower: ArrayLike, upper: ArrayLike, open_top: bool = True) -> "ContactSurface":
+    def tank(cls, lower: ArrayLike, upper: ArrayLike, open_top: bool = True) -> ContactSurface:
         """The inner surface of the box ``[lower, upper]`` (2D or 3D), normals into the box.
 
         2D: the sides right, floor, left (and the lid unless ``open_top``), one segment each.
@@ -251,6 +250,14 @@ class SurfacePoints:
         return self.average @ x, self.average @ v, n, dn
 
 
+def _on_chain(cum: NDArray[np.float64], chain_nodes: NDArray[np.int64], s: float) -> list[tuple[int, float]]:
+    """The two nodes of a chain (cumulative arc lengths ``cum``) around arc length ``s`` and their
+    linear interpolation weights."""
+    i = int(np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(chain_nodes) - 2))
+    f = (s - cum[i]) / (cum[i + 1] - cum[i])
+    return [(int(chain_nodes[i]), 1.0 - f), (int(chain_nodes[i + 1]), f)]
+
+
 def surface_points(surface: ContactSurface, spacing: float) -> SurfacePoints:
     """Points along each chain of the 2D ``surface`` (total length ``S``): ``k = max(1,
     round(S/spacing))`` of them at arc lengths ``(j + ½) S/k``, each with the footprint
@@ -274,16 +281,11 @@ def surface_points(surface: ContactSurface, spacing: float) -> SurfacePoints:
         xi_l.append((arc - cum[j]) / lengths[chain[j]])
         w_l.append(np.full(k, width))
 
-        def at(s: float) -> list[tuple[int, float]]:
-            i = int(np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(chain) - 1))
-            f = (s - cum[i]) / (cum[i + 1] - cum[i])
-            return [(chain_nodes[i], 1.0 - f), (chain_nodes[i + 1], f)]
-
         for q in range(k):
             a, b = arc[q] - 0.5 * width, arc[q] + 0.5 * width
             p = count + q
-            rows_s += [(p, n_, w_) for n_, w_ in at(a)]
-            rows_e += [(p, n_, w_) for n_, w_ in at(b)]
+            rows_s += [(p, n_, w_) for n_, w_ in _on_chain(cum, chain_nodes, a)]
+            rows_e += [(p, n_, w_) for n_, w_ in _on_chain(cum, chain_nodes, b)]
             for i in range(len(chain)):                  # mean of the hat functions over [a, b]
                 lo, hi = max(a, cum[i]), min(b, cum[i + 1])
                 if hi <= lo:

@@ -51,8 +51,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mlsgalerkin.contact import PenaltyContact
-from mlsgalerkin.contact.surface import SurfacePoints
 from mlsgalerkin.contact.penalty import DEFAULT_ALPHA, DEFAULT_DAMPING, DEFAULT_FEATURE_ANGLE
+from mlsgalerkin.contact.surface import SurfacePoints
 from mlsgalerkin.dynamics import Interaction, Solver, Surface
 from mlsgalerkin.fluid.bodies import FluidBody, WallBody
 
@@ -145,7 +145,7 @@ class StructureCoupling(Interaction):
                 f"tolerance={self.tolerance!r}, relaxation={self.relaxation!r}, contact={self.contact!r})")
 
     # ------------------------------------------------------------------ validation
-    def problems(self, scene: "Scene") -> list[str]:
+    def problems(self, scene: Scene) -> list[str]:
         owner = f"StructureCoupling {self.name!r}"
         out = super().problems(scene)
         bodies = {b.name: b for b in scene.bodies}

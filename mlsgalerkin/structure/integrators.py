@@ -52,7 +52,6 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 from scipy.sparse.linalg import splu
-
 from skfem import Basis
 
 from mlsgalerkin.dynamics import Surface
