@@ -211,8 +211,11 @@ class ElasticMotion:
         # still unconditionally stable and free of numerical damping) and the matching γΔt'C
         gamma = 0.5
         free = self.body.free
-        if self._lu is None or not (self._lu_dt / NEWMARK_REUSE <= dt <= self._lu_dt):
-            lu_dt = dt * NEWMARK_MARGIN
+        fits = self._lu_dt / NEWMARK_REUSE <= dt <= self._lu_dt
+        if self._lu is None or not fits:
+            # after a restart the factorisation is remade for the step it was made for, so the
+            # run continues bit for bit
+            lu_dt = self._lu_dt if (self._lu is None and fits) else dt * NEWMARK_MARGIN
             M = sp.diags(1.0 / self.inv_m)
             C = self.a0 * M + self.a1 * self.K
             A = (M + gamma * lu_dt * C + 0.25 * lu_dt * lu_dt * self.K).tocsr()[free][:, free]
@@ -303,13 +306,15 @@ class ElasticMotion:
     def checkpoint(self) -> dict[str, FloatArray]:
         return {"u": self.u.copy(), "v": self.v.copy(), "a": self.a.copy(), "f": self.f.copy(),
                 "f_last": self.f_last.copy(),
-                "counters": np.array([self.work, self.substeps, self.outer_steps, self.max_substeps, self.dt_prev])}
+                "counters": np.array([self.work, self.substeps, self.outer_steps, self.max_substeps, self.dt_prev,
+                                      self._lu_dt, self.factorisations])}
 
     def restore(self, arrays: dict[str, FloatArray]) -> None:
         self.u, self.v, self.a, self.f, self.f_last = (arrays[k].copy() for k in ("u", "v", "a", "f", "f_last"))
-        work, sub, outer, mx, dt_prev = arrays["counters"]
+        work, sub, outer, mx, dt_prev, lu_dt, factorisations = arrays["counters"]
         self.work, self.substeps, self.outer_steps, self.max_substeps = float(work), int(sub), int(outer), int(mx)
-        self.dt_prev = float(dt_prev)
+        self.dt_prev, self._lu_dt, self.factorisations = float(dt_prev), float(lu_dt), int(factorisations)
+        self._lu = None
 
     def summary(self) -> dict[str, Any]:
         b = self.body
