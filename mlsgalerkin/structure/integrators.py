@@ -343,11 +343,13 @@ class RigidMotion:
         self.theta = 0.0
         self.V = body.velocity.copy()
         self.omega = float(body.angular_velocity)
-        self.A = np.zeros(2)          # acceleration of the centre under the body's own forces (m/s²)
-        self.alpha = 0.0              # and angular acceleration (rad/s²)
-        self.F = np.zeros(2)          # resultant of the surface forces of the last exchange (N)
-        self.M = 0.0                  # their moment about the centre of mass (N m)
-        self.F_last = np.zeros(2)     # resultant and moment of the exchange before, for the extrapolation
+        d = body.dim
+        self.dim = d
+        self.A = np.zeros(d)          # acceleration of the centre under the body's own forces (m/s²)
+        self.alpha = 0.0              # and angular acceleration about the axis (rad/s²)
+        self.F = np.zeros(d)          # resultant of the surface forces of the last exchange (N)
+        self.M = 0.0                  # their moment about the centre of mass, about the axis (N m)
+        self.F_last = np.zeros(d)     # resultant and moment of the exchange before, for the extrapolation
         self.M_last = 0.0
         self._end: tuple[FloatArray, float] | None = None
         self.dt_prev = 0.0
@@ -356,7 +358,8 @@ class RigidMotion:
         self.outer_steps = 0
         self.seconds = 0.0
         con = body.constraint
-        self.g = np.zeros(2) if body.gravity is None else body.gravity
+        self.g = np.zeros(d) if body.gravity is None else body.gravity
+        self.axis = con.unit_axis(d) if isinstance(con, Hinge) else np.array([0.0, 0.0, 1.0])
         if isinstance(con, Hinge):
             self.p = np.asarray(con.point, dtype=float)
             self.I = body.hinge_inertia()
@@ -370,13 +373,33 @@ class RigidMotion:
     def n_surface(self) -> int:
         return self.X.shape[0]
 
-    @staticmethod
-    def _rotation(theta: float) -> FloatArray:
+    def _rotation(self, theta: float) -> FloatArray:
+        """The rotation by ``theta`` about the axis (2 × 2 in 2D; Rodrigues' formula in 3D)."""
         c, s = math.cos(theta), math.sin(theta)
-        return np.array([[c, -s], [s, c]])
+        if self.dim == 2:
+            return np.array([[c, -s], [s, c]])
+        a = self.axis
+        K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+        return np.eye(3) + s * K + (1.0 - c) * (K @ K)
+
+    def _turn(self, r: FloatArray) -> FloatArray:
+        """``e × r`` for the unit axis ``e`` (rows of ``r``): the velocity of a unit rate of turn."""
+        if self.dim == 2:
+            return np.stack([-r[..., 1], r[..., 0]], axis=-1)
+        return np.cross(self.axis, r)
+
+    def _torque(self, r: FloatArray, f: FloatArray) -> FloatArray:
+        """``(r × f)·e``, the moment about the axis, of rows ``r``, ``f``."""
+        if self.dim == 2:
+            return _cross(r, f)
+        return np.cross(r, f) @ self.axis
+
+    def _axis_d(self) -> FloatArray:
+        """The axis in the body's dimension (zero in 2D: no component of ``r`` lies along it)."""
+        return np.zeros(2) if self.dim == 2 else self.axis
 
     def nodes(self) -> FloatArray:
-        """Surface node positions ``(m, 2)`` now (m)."""
+        """Surface node positions ``(m, d)`` now (m)."""
         return self.c + (self.X - self.c0) @ self._rotation(self.theta).T
 
     def _generalised(self, F: FloatArray, M: float) -> tuple[FloatArray, float]:
@@ -385,13 +408,15 @@ class RigidMotion:
         con, m = self.body.constraint, self.body.mass
         if isinstance(con, Hinge):
             r = self.c - self.p
-            alpha = (M + float(_cross(r, F))) / self.I
-            return alpha * np.array([-r[1], r[0]]), alpha
+            alpha = (M + float(self._torque(r, F))) / self.I
+            return alpha * self._turn(r), alpha
         if con == "free":
             return F / m, M / self.I
         if con == "vertical":
-            return np.array([0.0, F[1] / m]), 0.0
-        return np.zeros(2), 0.0
+            A = np.zeros(self.dim)
+            A[-1] = F[-1] / m
+            return A, 0.0
+        return np.zeros(self.dim), 0.0
 
     def _own_accelerations(self) -> None:
         """``A, α`` under the body's own forces: weight, hinge spring and damper."""
@@ -399,9 +424,9 @@ class RigidMotion:
         con = b.constraint
         if isinstance(con, Hinge):
             r = self.c - self.p
-            moment = float(_cross(r, m * self.g)) - con.stiffness * self.theta - con.damping * self.omega
+            moment = float(self._torque(r, m * self.g)) - con.stiffness * self.theta - con.damping * self.omega
             self.alpha = moment / self.I
-            self.A = self.alpha * np.array([-r[1], r[0]]) - self.omega**2 * r
+            self.A = self.alpha * self._turn(r) - self.omega**2 * (r - (r @ self._axis_d()) * self._axis_d())
         else:
             self.A, self.alpha = self._generalised(m * self.g, 0.0)
 
@@ -444,7 +469,7 @@ class RigidMotion:
                 self._accelerations(F, M)
                 self.omega += 0.5 * h * self.alpha
                 r = self.c - self.p
-                self.V = self.omega * np.array([-r[1], r[0]])
+                self.V = self.omega * self._turn(r)
             elif con != "fixed":
                 self.V += 0.5 * h * self.A
                 self.omega += 0.5 * h * self.alpha
@@ -461,9 +486,10 @@ class RigidMotion:
 
     def surface(self) -> Surface:
         r = self.nodes() - self.c
-        perp = np.stack([-r[:, 1], r[:, 0]], axis=1)
+        perp = self._turn(r)
+        e = self._axis_d()
         v = self.V + self.omega * perp
-        a = self.A + self.alpha * perp - self.omega**2 * r
+        a = self.A + self.alpha * perp - self.omega**2 * (r - np.outer(r @ e, e))
         return Surface(self.body.name, self.c + r, v, self.body.surface.facets, None, a)
 
     def step_end_load(self) -> tuple[FloatArray, float]:
@@ -477,7 +503,7 @@ class RigidMotion:
     def add_forces(self, forces: FloatArray) -> None:
         r = self.nodes() - self.c
         self.F = self.F + forces.sum(axis=0)
-        self.M += float(np.sum(_cross(r, forces)))
+        self.M += float(np.sum(self._torque(r, forces)))
 
     def clear_forces(self) -> None:
         self.F = np.zeros(2)
@@ -499,9 +525,10 @@ class RigidMotion:
     def observables(self) -> dict[str, float]:
         row = self.energies()
         d = self.c - self.c0
-        row.update({"x": float(d[0]), "y": float(d[1]), "angle": self.theta, "vx": float(self.V[0]),
-                    "vy": float(self.V[1]), "omega": self.omega, "force_x": float(self.F[0]),
-                    "force_y": float(self.F[1]), "moment": self.M})
+        for k in range(self.dim):
+            a = "xyz"[k]
+            row[a], row[f"v{a}"], row[f"force_{a}"] = float(d[k]), float(self.V[k]), float(self.F[k])
+        row.update({"angle": self.theta, "omega": self.omega, "moment": self.M})
         return row
 
     def frame(self) -> tuple[FloatArray, dict[str, FloatArray]]:
@@ -509,8 +536,9 @@ class RigidMotion:
         return x, {"displacement": x - self.X, "velocity": self.surface().velocities}
 
     def frame_cells(self) -> tuple[str, NDArray[np.int64]]:
-        """The surface segments on :meth:`frame`'s points (the surface nodes)."""
-        return "line", self.body.surface.facets.astype(np.int64)
+        """The surface facets on :meth:`frame`'s points (the surface nodes): segments in 2D,
+        triangles in 3D."""
+        return ("line" if self.dim == 2 else "triangle"), self.body.surface.facets.astype(np.int64)
 
     def finite(self) -> bool:
         return bool(np.all(np.isfinite(self.c)) and math.isfinite(self.theta) and math.isfinite(self.omega))

@@ -1,4 +1,6 @@
-r"""Rigid bodies in 2D: mass, inertia, a constraint, and a surface of segments the fluid touches.
+r"""Rigid bodies in 2D and 3D: mass, inertia, a constraint, and a surface the fluid touches
+(segments in 2D, triangles in 3D). In 3D a body moves vertically, stays fixed, or turns on a
+hinge about an axis; free rotation in 3D is not modelled.
 
 A rigid body moves its surface nodes :math:`\mathbf X_a` (at rest) with the translation of its
 centre of mass :math:`\mathbf c` and a rotation :math:`\theta` about it:
@@ -56,25 +58,37 @@ CONSTRAINTS = ("free", "vertical", "fixed")
 @dataclass(frozen=True)
 class Hinge:
     """Rotation about the fixed ``point`` (m) with a rotational spring ``stiffness`` (N m/rad, per
-    unit depth in 2D) and damper ``damping`` (N m s/rad); the angle is zero at rest."""
+    unit depth in 2D) and damper ``damping`` (N m s/rad); the angle is zero at rest. In 3D the
+    rotation is about the line through ``point`` along ``axis`` (a unit vector; in 2D the axis is
+    out of the plane)."""
 
-    point: tuple[float, float]
+    point: tuple[float, ...]
     stiffness: float = 0.0
     damping: float = 0.0
+    axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
     def __post_init__(self) -> None:
         p = np.asarray(self.point, dtype=float)
-        if p.shape != (2,) or not np.all(np.isfinite(p)):
-            raise ValueError(f"Hinge: point must be a finite (2,) position, got {self.point!r}")
+        if p.shape not in ((2,), (3,)) or not np.all(np.isfinite(p)):
+            raise ValueError(f"Hinge: point must be a finite (2,) or (3,) position, got {self.point!r}")
         if not (math.isfinite(self.stiffness) and self.stiffness >= 0):
             raise ValueError(f"Hinge: stiffness must be finite and >= 0 (N m/rad), got {self.stiffness!r}")
         if not (math.isfinite(self.damping) and self.damping >= 0):
             raise ValueError(f"Hinge: damping must be finite and >= 0 (N m s/rad), got {self.damping!r}")
+        a = np.asarray(self.axis, dtype=float)
+        if a.shape != (3,) or not np.all(np.isfinite(a)) or abs(np.linalg.norm(a) - 1.0) > 1e-9:
+            raise ValueError(f"Hinge: axis must be a unit (3,) vector, got {self.axis!r}")
+
+    def unit_axis(self, dim: int) -> FloatArray:
+        """The rotation axis as a 3-vector (``(0, 0, 1)`` in 2D)."""
+        return np.array([0.0, 0.0, 1.0]) if dim == 2 else np.asarray(self.axis, dtype=float)
 
 
 @dataclass
 class RigidBody(Body):
-    """A rigid body in 2D (module docstring).
+    """A rigid body in 2D or 3D (module docstring). In 3D the constraint is ``"vertical"`` (along
+    the last axis), ``"fixed"`` or a :class:`Hinge` about an axis; free 3D rotation is not
+    modelled.
 
     Parameters
     ----------
@@ -84,14 +98,16 @@ class RigidBody(Body):
     mass : float
         kg (per unit depth in 2D).
     inertia : float
-        Moment of inertia about the centre of mass (kg m², per unit depth).
-    centre : (2,) point
+        Moment of inertia about the centre of mass (kg m², per unit depth in 2D): about the axis
+        out of the plane in 2D, about the hinge's axis through the centre in 3D.
+    centre : (d,) point
         Centre of mass at rest (m).
     constraint : str or Hinge
         ``"free"``, ``"vertical"``, ``"fixed"`` or a :class:`Hinge`.
-    velocity : (2,) m/s and angular_velocity : rad/s
-        Initial velocity of the centre of mass and initial rate of rotation.
-    gravity : (2,) m/s², optional
+    velocity : (d,) m/s and angular_velocity : rad/s
+        Initial velocity of the centre of mass and initial rate of rotation (about the hinge's
+        axis in 3D).
+    gravity : (d,) m/s², optional
         Acceleration of gravity on the body; none by default.
     """
 
@@ -102,21 +118,24 @@ class RigidBody(Body):
     inertia: float
     centre: FloatArray
     constraint: str | Hinge = "free"
-    velocity: FloatArray = field(default_factory=lambda: np.zeros(2))
+    velocity: FloatArray | None = None
     angular_velocity: float = 0.0
     gravity: FloatArray | None = None
 
     def __post_init__(self) -> None:
         owner = f"RigidBody {self.name!r}"
-        if not isinstance(self.surface, ContactSurface) or self.surface.dim != 2:
-            raise ValueError(f"{owner}: surface must be a 2D mlsgalerkin.contact.ContactSurface (normals out of the "
+        if not isinstance(self.surface, ContactSurface):
+            raise ValueError(f"{owner}: surface must be a mlsgalerkin.contact.ContactSurface (normals out of the "
                              f"body), got {type(self.surface).__name__}")
         if not (isinstance(self.mass, (int, float)) and math.isfinite(self.mass) and self.mass > 0):
             raise ValueError(f"{owner}: mass must be positive (kg per unit depth), got {self.mass!r}")
         if not (isinstance(self.inertia, (int, float)) and math.isfinite(self.inertia) and self.inertia > 0):
             raise ValueError(f"{owner}: inertia must be positive (kg m² about the centre of mass), got {self.inertia!r}")
         self.centre = self._vector(owner, "centre", self.centre)
-        self.velocity = self._vector(owner, "velocity", self.velocity)
+        if self.centre.shape != (self.surface.dim,):
+            raise ValueError(f"{owner}: centre must be a ({self.surface.dim},) point like the surface's nodes")
+        self.velocity = (np.zeros(self.surface.dim) if self.velocity is None
+                         else self._vector(owner, "velocity", self.velocity))
         if not math.isfinite(self.angular_velocity):
             raise ValueError(f"{owner}: angular_velocity must be finite, got {self.angular_velocity!r}")
         if self.gravity is not None:
@@ -124,7 +143,14 @@ class RigidBody(Body):
         if not (isinstance(self.constraint, Hinge) or self.constraint in CONSTRAINTS):
             raise ValueError(f"{owner}: constraint must be one of {CONSTRAINTS} or a Hinge(point, stiffness), got "
                              f"{self.constraint!r}")
-        if self.constraint == "vertical" and (self.velocity[0] != 0 or self.angular_velocity != 0):
+        if self.dim == 3 and self.constraint == "free":
+            raise ValueError(f"{owner}: a 3D rigid body moves vertically, stays fixed or turns on a Hinge(point, "
+                             "stiffness, axis=...); free rotation in 3D is not modelled")
+        if isinstance(self.constraint, Hinge) and np.asarray(self.constraint.point).shape != (self.dim,):
+            raise ValueError(f"{owner}: the hinge point must be a ({self.dim},) position")
+        if self.constraint == "vertical" and np.any(self.velocity[:-1] != 0):
+            raise ValueError(f"{owner}: a body constrained to vertical motion starts with no horizontal velocity")
+        if self.constraint == "vertical" and self.angular_velocity != 0:
             raise ValueError(f"{owner}: a body constrained to vertical motion starts with no horizontal velocity "
                              "and no rotation")
         if self.constraint == "fixed" and (np.any(self.velocity != 0) or self.angular_velocity != 0):
@@ -138,28 +164,35 @@ class RigidBody(Body):
     @staticmethod
     def _vector(owner: str, what: str, value: ArrayLike) -> FloatArray:
         v = np.asarray(value, dtype=float)
-        if v.shape != (2,) or not np.all(np.isfinite(v)):
-            raise ValueError(f"{owner}: {what} must be a finite (2,) vector, got {value!r}")
+        if v.ndim != 1 or v.shape[0] not in (2, 3) or not np.all(np.isfinite(v)):
+            raise ValueError(f"{owner}: {what} must be a finite (2,) or (3,) vector, got {value!r}")
         return v
 
     @property
     def dim(self) -> int:
-        return 2
+        return self.surface.dim
 
     # ------------------------------------------------------------------ derived
+    def _arm(self) -> FloatArray:
+        """``r = c0 − p`` as a 3-vector, with the component along the hinge's axis removed."""
+        r = np.zeros(3)
+        r[: self.dim] = self.centre - np.asarray(self.constraint.point, dtype=float)
+        a = self.constraint.unit_axis(self.dim)
+        return r - (r @ a) * a
+
     def hinge_inertia(self) -> float:
-        """``I_p = I_c + m |c0 − p|²`` (kg m²) about the hinge (a :class:`Hinge` body)."""
-        p = np.asarray(self.constraint.point, dtype=float)
-        return self.inertia + self.mass * float(np.sum((self.centre - p) ** 2))
+        """``I_p = I_c + m |r⊥|²`` (kg m²) about the hinge's axis (a :class:`Hinge` body), ``r⊥``
+        the centre's distance from the axis."""
+        return self.inertia + self.mass * float(self._arm() @ self._arm())
 
     def natural_frequency_squared(self) -> float:
-        """``(K − m g·(c0 − p) stiffening)/I_p`` (rad²/s²) of small dry oscillations about a hinge:
-        ``ω² = (K + m g·(c0 − p))/I_p`` (gravity pointing down lowers it for a body above its
-        hinge)."""
+        """``ω² = (K + m g·r⊥)/I_p`` (rad²/s²) of small dry oscillations about a hinge (gravity
+        pointing away from the centre lowers it for a body standing on its hinge)."""
         h = self.constraint
-        p = np.asarray(h.point, dtype=float)
-        g = np.zeros(2) if self.gravity is None else self.gravity
-        return (h.stiffness + self.mass * float(g @ (self.centre - p))) / self.hinge_inertia()
+        g = np.zeros(3)
+        if self.gravity is not None:
+            g[: self.dim] = self.gravity
+        return (h.stiffness + self.mass * float(g @ self._arm())) / self.hinge_inertia()
 
     def natural_period(self) -> float:
         """Dry natural period ``2π/ω_n`` (s) of a hinged body."""
