@@ -96,6 +96,17 @@ class StructureCoupling(Interaction):
         The penalty contact's parameters (:class:`~mlsgalerkin.contact.PenaltyContact`):
         thickness ``g0`` (m, half the particle spacing), reach (m, default ``2 g0``), stiffness
         factor, damping ratio, reference step (s), feature angle (degrees).
+    wall_acceleration : float
+        The share (0 to 1) of the structure's acceleration the wall pressure sees. 0 by default:
+        with 1 an explicit coupling diverged for the light rubber gate of ``elastic_gate`` and the
+        clamped beam of ``beam_clamped``, while the heavy plate of ``hydrostatic_plate`` needed it
+        (``docs/theory/fsi.md`` §2). With ``iterations > 1``, 1 is safe.
+    iterations : int
+        Passes of the partitioned iteration per step (1: the explicit, staggered coupling).
+    tolerance : float
+        Convergence of the iteration: the CRMS of the interface residual (m).
+    relaxation : float
+        Aitken's relaxation factor to start from (0 to 1).
     name : str
         Key in ``summary.json``.
     """
