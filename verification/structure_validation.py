@@ -125,9 +125,20 @@ def plot(section: str, out: Path, rows: list[dict]) -> None:
         for ax in axes:
             ax.set_xlabel("t (ms)")
         axes[0].legend(fontsize=7)
+    elif section == "spring":
+        fig, axes = plt.subplots(2, 1, figsize=(9, 5.4), sharex=True)
+        for label, ts in series:
+            axes[0].plot(ts["time"], np.degrees(np.asarray(ts["angle"])), lw=1.0, label=label)
+            axes[1].plot(ts["time"], 1e-3 * np.asarray(ts["pressure_P4"]), lw=0.8, label=label)
+        for ax in axes:
+            for a, b in ((0.75, 2.0), (5.1, 5.9)):
+                ax.axvspan(a, b, color="0.9", zorder=0)
+        axes[0].set_ylabel("angle (deg)")
+        axes[1].set_ylabel("pressure_P4 (kPa)")
+        axes[1].set_xlabel("t (s)  (shaded: the source's impact windows)")
+        axes[0].legend(fontsize=7)
     else:
-        column, unit, scale = {"plate": ("midspan_deflection", "mm", 1e3), "clamped": ("tip_x", "mm", 1e3),
-                               "spring": ("angle", "deg", 180.0 / np.pi)}[section]
+        column, unit, scale = {"plate": ("midspan_deflection", "mm", 1e3), "clamped": ("tip_x", "mm", 1e3)}[section]
         fig, ax = plt.subplots(figsize=(8, 3.6))
         for label, ts in series:
             ax.plot(ts["time"], scale * np.asarray(ts[column]), lw=1.0, label=label)
