@@ -277,8 +277,12 @@ class FluidSolver(Solver):
         self._offsets = None
         particle_walls = [w for w in self.walls if w.n]
         if particle_walls and all(w.normals is not None for w in particle_walls):
+            # walls riding on a structure are left out (offset −inf: never behind): their body is
+            # thin and has corners, where the half-space test of the nearest wall particle counts
+            # the water passing a corner as behind it; the coupling's contact measures the
+            # penetration into the structure against its exact surface (summary: max_penetration_m)
             self._offsets = np.concatenate([
-                w.anchors[:, 2].copy() if w.anchors is not None
+                np.full(w.n, -np.inf) if w.anchors is not None
                 else surface_offsets(w.positions, np.asarray(w.normals, dtype=float), w.spacing)
                 for w in particle_walls])
         self.penetration = {"max_depth_dx": 0.0, "max_count": 0, "time_of_max_depth_s": None, "warned": False}
