@@ -174,9 +174,7 @@ def wet_surface(basis: Basis, facets: NDArray[np.int64]) -> WetSurface:
         pairs = np.stack([first, last], axis=1)                   # (k, 2, 2)
     node_dof = pairs[:, :, 0].ravel()
     unique, local = np.unique(node_dof, return_inverse=True)
-    dofs = np.stack([unique, unique + 1], axis=1) if np.all(basis.nodal_dofs[1] == basis.nodal_dofs[0] + 1) else None
-    if dofs is None:  # pragma: no cover - scikit-fem interleaves the components of ElementVector
-        raise RuntimeError("unexpected scikit-fem DOF layout: the vector components are not interleaved")
+    dofs = np.stack([unique, unique + 1], axis=1)   # scikit-fem interleaves ElementVector's components
     reference = basis.doflocs[:, unique].T.copy()
     return WetSurface(dofs.astype(np.int64), reference, local.reshape(-1, 2).astype(np.int64))
 

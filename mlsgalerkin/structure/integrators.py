@@ -55,6 +55,7 @@ from scipy.sparse.linalg import splu
 from skfem import Basis
 
 from mlsgalerkin.dynamics import Surface
+from mlsgalerkin.structure import hyperelastic
 from mlsgalerkin.structure.elastic import ElasticBody
 from mlsgalerkin.structure.explicit import subcycle_linear
 from mlsgalerkin.structure.rigid import Hinge, RigidBody
@@ -123,11 +124,9 @@ class ElasticMotion:
         self.factorisations = 0
         self._internal = None
         if body.model != "linear":
-            from mlsgalerkin.structure.hyperelastic import QuadratureData
-
             # 3 × 3 Gauss points per quadrilateral (scikit-fem's default for Q2 is 5 × 5, exact for the
             # mass): the usual full integration of the internal force, 2.8 times fewer points
-            self._quadrature = QuadratureData.from_basis(Basis(body.mesh, body.basis.elem, intorder=NONLINEAR_ORDER))
+            self._quadrature = hyperelastic.QuadratureData.from_basis(Basis(body.mesh, body.basis.elem, intorder=NONLINEAR_ORDER))
             self._lame = body.material.lame()
 
     # ------------------------------------------------------------------ forces
@@ -135,15 +134,16 @@ class ElasticMotion:
         """``K u`` (linear) or the total-Lagrangian ``∫ P : ∇δu`` (N)."""
         if self.body.model == "linear":
             return self.K @ u
-        from mlsgalerkin.structure.hyperelastic import internal_force
-
-        return internal_force(self._quadrature, u, *self._lame, self.body.model)
+        return hyperelastic.internal_force(self._quadrature, u, *self._lame, self.body.model)
 
     def acceleration(self) -> FloatArray:
         """``M⁻¹(f_g − f_int(u) − C v)``, the body's own forces, with the clamped degrees of
         freedom at zero."""
         b = self.body
-        a = (b.weight - self.internal_force(self.u) - self.a1 * (self.K @ self.v)) * self.inv_m - self.a0 * self.v
+        f = b.weight - self.internal_force(self.u)
+        if self.a1:
+            f = f - self.a1 * (self.K @ self.v)
+        a = f * self.inv_m - self.a0 * self.v
         a[self.fixed] = 0.0
         return a
 
@@ -260,9 +260,7 @@ class ElasticMotion:
         if b.model == "linear":
             strain = 0.5 * float(self.u @ (self.K @ self.u))
         else:
-            from mlsgalerkin.structure.hyperelastic import strain_energy
-
-            strain = float(strain_energy(self._quadrature, self.u, *self._lame, b.model))
+            strain = float(hyperelastic.strain_energy(self._quadrature, self.u, *self._lame, b.model))
         return {"kinetic_energy": kinetic, "strain_energy": strain,
                 "weight_potential": -float(b.weight @ self.u), "surface_work": self.work}
 
@@ -291,6 +289,11 @@ class ElasticMotion:
         loc = b.basis.doflocs[:, b.basis.nodal_dofs[0]].T
         dofs = b.basis.nodal_dofs.T
         return loc + self.u[dofs], {"displacement": self.u[dofs], "velocity": self.v[dofs]}
+
+    @property
+    def n_frame_points(self) -> int:
+        """Points of :meth:`frame`: the mesh's vertices."""
+        return int(self.body.mesh.p.shape[1])
 
     def frame_cells(self) -> tuple[str, NDArray[np.int64]]:
         """The mesh's cells on :meth:`frame`'s points (the vertices), in VTK's node order
@@ -534,6 +537,11 @@ class RigidMotion:
     def frame(self) -> tuple[FloatArray, dict[str, FloatArray]]:
         x = self.nodes()
         return x, {"displacement": x - self.X, "velocity": self.surface().velocities}
+
+    @property
+    def n_frame_points(self) -> int:
+        """Points of :meth:`frame`: the surface nodes."""
+        return self.n_surface
 
     def frame_cells(self) -> tuple[str, NDArray[np.int64]]:
         """The surface facets on :meth:`frame`'s points (the surface nodes): segments in 2D,

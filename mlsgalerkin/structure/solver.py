@@ -82,7 +82,7 @@ class StructureState:
         for m in self.motions.values():
             kind, cells = m.frame_cells()
             out.append((kind, cells + offset))
-            offset += m.frame()[0].shape[0]
+            offset += m.n_frame_points
         return out
 
     def health(self, limits: Any) -> dict | None:
