@@ -268,7 +268,8 @@ class TaitPressure(Effect):
             self.cavitated += int(np.count_nonzero(below))
             s.rho[f][below] = s.rho0[f][below]
         ratio = s.rho[f] / s.rho0[f]
-        p = tait_pressure(ratio, s.rho0[f], self.c0, self.gamma)
+        power = ratio**self.gamma          # shared by the pressure and the compression energy
+        p = (self.c0**2 / self.gamma * s.rho0[f]) * (power - 1.0)   # tait_pressure, term for term
         negative = p < 0.0
         n_neg = int(np.count_nonzero(negative))
         if n_neg:
@@ -279,7 +280,10 @@ class TaitPressure(Effect):
                 np.maximum(p, 0.0, out=p)
         s.p[f] = p
         s.c[f] = tait_sound_speed(ratio, self.c0, self.gamma)
-        s.sensors["compression_energy"] = float(np.dot(s.M[f], tait_energy(ratio, s.rho0[f], self.c0, self.gamma)))
+        # Σ M e(ρ) (tait_energy) with r^{γ−1} = r^γ / r: a diagnostic, so no second power
+        g = self.gamma
+        e = (self.c0**2 / g) * ((power / ratio - 1.0) / (g - 1.0) + 1.0 / ratio - 1.0)
+        s.sensors["compression_energy"] = float(np.dot(s.M[f], e))
 
     def time_step_limit(self, s: FluidState) -> float:
         f = s.fluid
