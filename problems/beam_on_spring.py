@@ -17,6 +17,8 @@ with a period of about 0.2 s in water (longer than 0.1879 s dry: the water's add
 Checked: ``angle`` (rad, counter-clockwise; the water pushes it negative) and ``pressure_P4``
 (Pa) over time — the impact windows (where the beam's turn exceeds a fifth of its largest, and
 where P4 exceeds 4 kPa), the largest angle and pressure, and the oscillation period after 6 s.
+``support="fixed"`` holds the beam still: the source's case 2, a rigid end wall, whose P4 shows
+when the returning water arrives without the beam's motion.
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ from mlsgalerkin.problem import numerical_dissipation, require, require_nonnegat
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
 from mlsgalerkin.structure import Hinge, RigidBody
 
-__all__ = ["Parameters", "make_scene", "analyse", "check", "SMOKE"]
+__all__ = ["Parameters", "SUPPORTS", "make_scene", "analyse", "check", "SMOKE"]
 
 SMOKE = {"dx": 0.06, "t_end": 0.01}
 #: Impact windows: where the beam's turn exceeds this share of its largest turn, or P4 this
@@ -47,6 +49,8 @@ PRESSURE_IMPACT = 4000.0
 #: Height of the pressure sensor above the bottom corner (m) and its face (m), as P4 of the
 #: fixed-wall case.
 SENSOR_HEIGHT, SENSOR_SIZE = 0.16, 0.0084
+#: How the beam stands: on its spring hinge (case 1 of the source) or fixed (case 2, a rigid wall).
+SUPPORTS = ("spring", "fixed")
 
 
 @dataclass(frozen=True)
@@ -57,6 +61,7 @@ class Parameters:
     beam_mass: float = 1.0        #: beam mass per metre (kg/m)
     thickness: float = 0.02       #: beam thickness, for its outline and inertia (m)
     stiffness: float = 1500.0     #: rotational spring at the hinge, per metre (N m/rad)
+    support: str = "spring"       #: the beam stands on its spring hinge (spring) or is held (fixed: a rigid wall) (choice)
     dx: float = 0.015             #: particle spacing (m)
     t_end: float = 7.0            #: end time (s)
     wall_acceleration: float = 0.0  #: share of the beam's acceleration the wall pressure sees, 0 to 1 (–)
@@ -74,8 +79,9 @@ class Parameters:
 
 def _beam(p: Parameters) -> RigidBody:
     base = (p.tank_length + 0.5 * p.thickness, 0.0)
-    return RigidBody.beam("beam", base, p.beam_length, p.beam_mass, p.thickness,
-                          constraint=Hinge((p.tank_length, 0.0), stiffness=p.stiffness), gravity=(0.0, -p.g))
+    constraint = Hinge((p.tank_length, 0.0), stiffness=p.stiffness) if p.support == "spring" else "fixed"
+    return RigidBody.beam("beam", base, p.beam_length, p.beam_mass, p.thickness, constraint=constraint,
+                          gravity=(0.0, -p.g))
 
 
 def _tank(p: Parameters, top: float, layers: int = 3) -> WallBody:
@@ -149,7 +155,8 @@ def analyse(result, p: Parameters) -> dict:
     theta = np.asarray(ts["angle"])
     p4 = np.asarray(ts["pressure_P4"])
     beam = _beam(p)
-    out: dict = {"dry_period_s": beam.natural_period(), "angle_min_rad": float(theta.min()),
+    out: dict = {"support": p.support, "dry_period_s": beam.natural_period() if p.support == "spring" else None,
+                 "angle_min_rad": float(theta.min()),
                  "angle_max_rad": float(theta.max()), "pressure_P4_max_Pa": float(p4.max()),
                  "time_of_pressure_P4_max_s": float(t[int(np.argmax(p4))])}
     big = IMPACT_SHARE * float(np.abs(theta).max()) if theta.size else 0.0
@@ -159,7 +166,7 @@ def analyse(result, p: Parameters) -> dict:
     out["turn_windows"] = "; ".join(f"{a:.2f}-{b:.2f} s" for a, b in out["impact_windows_s"])
     out["P4_windows"] = "; ".join(f"{a:.2f}-{b:.2f} s" for a, b in out["pressure_P4_windows_s"])
     late = t >= min(6.0, 0.85 * t[-1])
-    if late.sum() > 10:
+    if late.sum() > 10 and p.support == "spring":
         y = theta[late] - theta[late].mean()
         tl = t[late]
         k = np.flatnonzero((y[:-1] < 0) & (y[1:] >= 0))
@@ -170,8 +177,11 @@ def analyse(result, p: Parameters) -> dict:
     out["headline"] = (f"turn windows {out['impact_windows_s']} s, P4 > 4 kPa {out['pressure_P4_windows_s']} s "
                        f"(source: impacts 0.75-2 and 5.1-5.9 s); largest turn "
                        f"{math.degrees(max(out['angle_min_rad'], out['angle_max_rad'], key=abs)):.2f}°; P4 max "
-                       f"{out['pressure_P4_max_Pa']:.0f} Pa; period after 6 s {out.get('late_period_s')} s "
-                       f"(dry {out['dry_period_s']:.4f} s)")
+                       f"{out['pressure_P4_max_Pa']:.0f} Pa")
+    if p.support == "spring":
+        out["headline"] += f"; period after 6 s {out.get('late_period_s')} s (dry {out['dry_period_s']:.4f} s)"
+    else:
+        out["headline"] += "; the beam held fixed (a rigid end wall)"
     return out
 
 
@@ -181,6 +191,7 @@ def check(p: Parameters) -> list[str]:
                            "t_end", "rho", "c0_factor", "g", "probe_every", "frame_every")
     out += require_nonnegative(p, "alpha", "delta", "wall_acceleration")
     out += require(p.wall_acceleration <= 1.0, f"wall_acceleration is a share in [0, 1], got {p.wall_acceleration!r}")
+    out += require(p.support in SUPPORTS, f"support must be one of {SUPPORTS}, got {p.support!r}")
     out += require(p.shifting in SHIFTING_MODES, f"shifting must be one of {SHIFTING_MODES}, got {p.shifting!r}")
     out += require(p.negative_pressure in NEGATIVE_PRESSURE_MODES,
                    f"negative_pressure must be one of {NEGATIVE_PRESSURE_MODES}, got {p.negative_pressure!r}")

@@ -31,7 +31,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from skfem import MeshQuad
+from skfem import FacetBasis, LinearForm, MeshQuad, asm
 
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.data import reference_columns
@@ -44,7 +44,7 @@ from mlsgalerkin.problem import numerical_dissipation, require, require_nonnegat
 from mlsgalerkin.scene import Approximation, Output, Probe, Scene
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial
 
-__all__ = ["Parameters", "make_scene", "analyse", "check", "load_reference", "SMOKE"]
+__all__ = ["Parameters", "make_scene", "analyse", "check", "load_reference", "static_tip", "SMOKE"]
 
 SMOKE = {"dx": 0.005, "t_end": 0.003, "elements": 8}
 
@@ -60,6 +60,7 @@ class Parameters:
     rho_gate: float = 1100.0      #: rubber density (kg/m³)
     model: str = "neo_hookean"    #: gate material: neo_hookean, stvenant_kirchhoff or linear (choice)
     wall_acceleration: float = 0.0  #: share of the gate's acceleration the wall pressure sees, 0 to 1 (–)
+    iterations: int = 1           #: passes of the partitioned iteration per step; 1 is the explicit coupling (–)
     elements: int = 32            #: Q2 elements along the gate (two through its thickness) (–)
     tank_length: float = 0.5      #: length of the floor, downstream past the gate (m)
     dx: float = 0.002             #: particle spacing (m)
@@ -85,6 +86,25 @@ def _gate(p: Parameters) -> ElasticBody:
                        clamped=lambda x: np.isclose(x[1], L), wet=lambda x: ~np.isclose(x[1], L),
                        model=p.model, integrator=integrator, gravity=(0.0, -p.g),
                        points={"tip": (x0 + 0.5 * p.thickness, 0.0)})
+
+
+def static_tip(p: Parameters, level: float) -> np.ndarray:
+    """Displacement ``(2,)`` (m) of the gate's free end at rest under a still water column of
+    height ``level`` (m) behind it: the hydrostatic pressure ``ρ g (level − y)`` on the wet face as
+    a dead load (its direction and height fixed at rest) plus the gate's weight, solved with the
+    gate's own model (:meth:`~mlsgalerkin.structure.ElasticBody.equilibrium`). The quasi-static
+    answer a slow gate would follow as the column drains."""
+    gate = _gate(p)
+    x0 = p.column_width
+    face = FacetBasis(gate.mesh, gate.basis.elem,
+                      facets=gate.mesh.facets_satisfying(lambda x: np.isclose(x[0], x0), boundaries_only=True))
+
+    @LinearForm
+    def pressure(v, w):
+        return p.rho * p.g * np.maximum(level - w.x[1], 0.0) * v[0]
+
+    u = gate.equilibrium(asm(pressure, face) + gate.weight, increments=10)
+    return gate.point_displacements(u)["tip"]
 
 
 def load_reference() -> dict[str, np.ndarray]:
@@ -116,7 +136,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     riding = WallBody.on_surface("gate_walls", gate.wet.contact_surface(), p.dx, follows="gate", layers=layers,
                                  reference_density=p.rho)
     coupling = StructureCoupling("water", "gate", walls="gate_walls", thickness=0.25 * p.dx,
-                                 wall_acceleration=p.wall_acceleration)
+                                 wall_acceleration=p.wall_acceleration, iterations=p.iterations)
     effects = [TaitPressure(c0, u_max=u_max, negative_pressure=p.negative_pressure), Gravity((0.0, -p.g)),
                Walls("free_slip"), MonaghanViscosity(p.alpha)]
     effects += stabilisation(delta=p.delta, shifting=p.shifting, negative_pressure=p.negative_pressure,
@@ -128,11 +148,21 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
             return float(gate.point_displacements(m.u)["tip"][k])
         return read
 
+    n_water = water.n
+
+    def water_level(state) -> float:
+        """Height (m) of the water column behind the gate: the highest water particle over the
+        middle half of the column (its top surface, + dx/2)."""
+        x = state.fluid.x[:n_water]
+        middle = (x[:, 0] > 0.25 * p.column_width) & (x[:, 0] < 0.75 * p.column_width)
+        return float(x[middle, 1].max()) + 0.5 * p.dx if middle.any() else 0.0
+
     return Scene(
         [water, tank, cap, riding, gate], effects, t_end=p.t_end, name="elastic_gate",
         approximation=Approximation(h_factor=1.3), interactions=[coupling],
         output=Output(every=p.frame_every, probe_every=p.probe_every, gif=p.gif, png=p.gif, color_by="speed"),
-        probes=[Probe("tip_x", tip(0)), Probe("tip_y", tip(1))], parameters=dict(p.__dict__),
+        probes=[Probe("tip_x", tip(0)), Probe("tip_y", tip(1)), Probe("water_level", water_level)],
+        parameters=dict(p.__dict__),
     )
 
 
@@ -169,6 +199,7 @@ def check(p: Parameters) -> list[str]:
                            "elements", "tank_length", "dx", "t_end", "rho", "c0_factor", "g", "probe_every",
                            "frame_every")
     out += require_nonnegative(p, "alpha", "delta")
+    out += require(isinstance(p.iterations, int) and p.iterations >= 1, f"iterations must be >= 1, got {p.iterations!r}")
     out += require(-1.0 < p.poisson < 0.5, f"poisson must be in (-1, 0.5), got {p.poisson!r}")
     out += require(p.model in ("neo_hookean", "stvenant_kirchhoff", "linear"),
                    f"model must be neo_hookean, stvenant_kirchhoff or linear, got {p.model!r}")

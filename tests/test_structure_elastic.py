@@ -105,3 +105,21 @@ def test_wet_surface_is_oriented_out_of_the_body_and_follows_the_displacement():
     np.testing.assert_allclose(moved.nodes - top.nodes, [[0.0, -0.01]] * top.n_nodes)
     q1 = cantilever(8, 2, "Q1").surface(lambda x: np.isclose(x[1], 0.1))
     assert q1.n_facets == 8 and q1.n_nodes == 9
+
+
+@pytest.mark.parametrize("model", ["neo_hookean", "stvenant_kirchhoff"])
+def test_large_deflection_of_a_cantilever_against_the_elastica(model):
+    """A tip dead load ``P = EI/L²`` on a slender cantilever (L/h = 50, ν = 0, plane strain = the
+    beam): the elastica gives the tip's vertical deflection 0.3017 L and its horizontal pull-in
+    0.0564 L (Bisshopp & Drucker 1945); linear theory gives L/3 and no pull-in. ``equilibrium``
+    solves the body's own total-Lagrangian model. Measured (neo-Hookean): 0.30179 L and 0.05644 L;
+    the tolerances are the table's four digits plus the shear and thickness of the 2D body."""
+    L, h, E = 1.0, 0.02, 1e7
+    b = cantilever(40, 2, "Q2", L=L, h=h, E=E, nu=0.0, plane="strain")
+    body = ElasticBody("beam", b.mesh, b.material, "Q2", clamped=lambda x: np.isclose(x[0], 0.0), model=model)
+    P = E * h**3 / 12 / L**2
+    u = body.equilibrium(body.edge_traction(lambda x: np.isclose(x[0], L), (0.0, -P / h)), increments=8)
+    ux, uy = body.displacement_at(np.array([[L], [h / 2]]), u)[0]
+    assert abs(-uy / L - 0.3017) < 0.002 * 0.3017
+    assert abs(-ux / L - 0.0564) < 0.005 * 0.0564
+    assert np.allclose(body.equilibrium(np.zeros(body.n_dofs), increments=1), 0.0)

@@ -222,7 +222,7 @@ class ElasticBody(Body):
     mesh : skfem.Mesh
         A 2D mesh (``MeshQuad`` for Q1/Q2, ``MeshTri`` for P1) or a 3D one (``MeshHex`` for
         Hex1/Hex2, ``MeshTet`` for P1), in m, at rest. In 3D the material's ``plane`` does not
-        apply, and the model is linear.
+        apply: the linear and the nonlinear models use the 3D Lamé parameters (``lame3d``).
     material : ElasticMaterial
     element : str
     clamped : callable, optional
@@ -232,7 +232,8 @@ class ElasticBody(Body):
         The boundary facets the fluid may touch (same form); default all boundary facets.
     model : str
         ``"linear"`` (small strain), ``"stvenant_kirchhoff"`` or ``"neo_hookean"`` (total
-        Lagrangian, large rotations; plane strain, explicit only).
+        Lagrangian, large rotations, :mod:`~mlsgalerkin.structure.hyperelastic`; 2D plane strain
+        or 3D, explicit only).
     integrator : str
         ``"explicit"`` (central differences, sub-cycled inside the outer step) or ``"newmark"``
         (implicit average acceleration, linear model only; one step per outer step).
@@ -265,9 +266,6 @@ class ElasticBody(Body):
         table = ELEMENTS if d == 2 else ELEMENTS_3D
         if element not in table:
             raise ValueError(f"{owner}: element must be one of {sorted(table)} for a {d}D mesh, got {element!r}")
-        if d == 3 and model != "linear":
-            raise ValueError(f"{owner}: the nonlinear models are 2D (plane strain); a 3D body is linear "
-                             "(model='linear')")
         if not isinstance(material, ElasticMaterial):
             raise TypeError(f"{owner}: material must be an ElasticMaterial, got {type(material).__name__}")
         if model not in MODELS:
@@ -373,6 +371,38 @@ class ElasticBody(Body):
     def static(self, f: FloatArray) -> FloatArray:
         """The displacement ``(N,)`` (m) of ``K u = f`` with the clamped degrees of freedom at zero."""
         return solve(*condense(self.stiffness, f, D=self.clamped_dofs))
+
+    def equilibrium(self, f: FloatArray, increments: int = 10, tolerance: float = 1e-10,
+                    max_iterations: int = 30) -> FloatArray:
+        """The static displacement ``(N,)`` (m) of the body's own model under the dead load ``f``
+        (N): ``f_int(u) = f`` with the clamped degrees of freedom at zero.
+
+        For the linear model this is :meth:`static`. For a total-Lagrangian model, Newton's method
+        on the scikit-fem reference forms of :mod:`mlsgalerkin.structure.hyperelastic` (internal
+        force and tangent stiffness), with the load applied in ``increments`` equal parts; each
+        increment converges when the largest Newton correction is below ``tolerance`` times the
+        largest displacement (raises ``RuntimeError`` after ``max_iterations``). For checks and
+        quasi-static comparisons, not a run's step."""
+        if self.model == "linear":
+            return self.static(f)
+        from mlsgalerkin.structure import hyperelastic
+
+        lam, mu = hyperelastic.lame_for_dimension(self.material, self.dim)
+        f = np.asarray(f, dtype=float)
+        u = np.zeros(self.n_dofs)
+        for k in range(1, int(increments) + 1):
+            load = f * (k / increments)
+            for _ in range(max_iterations):
+                r = load - hyperelastic.internal_force_reference(self.basis, u, lam, mu, self.model)
+                K = hyperelastic.tangent_stiffness_reference(self.basis, u, lam, mu, self.model)
+                du = solve(*condense(K, r, D=self.clamped_dofs))
+                u += du
+                if np.abs(du).max() <= tolerance * max(np.abs(u).max(), 1e-300):
+                    break
+            else:
+                raise RuntimeError(f"ElasticBody {self.name!r}: Newton did not converge in {max_iterations} "
+                                   f"iterations at load increment {k}/{increments}; use more increments")
+        return u
 
     def displacement_at(self, points: FloatArray, u: FloatArray | None = None) -> FloatArray:
         """Displacement ``(n, d)`` at ``points (d, n)`` (m) interpolated with the element's shape functions."""
