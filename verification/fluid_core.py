@@ -97,6 +97,7 @@ def run(problem: str, label: str, overrides: dict, runs: Path) -> dict:
         row["particles"] = int(result.state.fluid.n)
         row["fluid_particles"] = int(result.state.fluid.n_fluid)
         row["run_dir"] = str(runs / safe)
+        row["run_commit"] = result.summary.get("provenance", {}).get("git_commit")
         row.update({k: v for k, v in res.items() if isinstance(v, (int, float, str)) and k != "headline"})
         row["headline"] = res.get("headline", "")
     except Exception as err:  # a diverged or failed case is a result too
@@ -130,7 +131,8 @@ def reanalysed(problem: str, label: str, overrides: dict, runs: Path) -> dict:
            "max_penetration_dx": summary.get("fluid", {}).get("wall_penetration", {}).get("max_depth_dx"),
            "fluid_particles": summary.get("fluid", {}).get("particles", {}).get("fluid"),
            "particles": summary.get("fluid", {}).get("particles", {}).get("total"),
-           "run_dir": str(run_dir), "wall_time_s": summary.get("wall_time_s")}
+           "run_dir": str(run_dir), "wall_time_s": summary.get("wall_time_s"),
+           "run_commit": summary.get("provenance", {}).get("git_commit")}
     row.update({k: v for k, v in res.items() if isinstance(v, (int, float, str)) and k != "headline"})
     row["headline"] = res.get("headline", "")
     if row.get("t_reached_s") and row.get("wall_time_s"):

@@ -12,6 +12,10 @@ So a tank's inner surface has its normals pointing into the tank, where the flui
 side a normal points to can be touched (the contact is one-sided; see
 :mod:`mlsgalerkin.contact.penalty`).
 
+:func:`surface_points` spreads points evenly over a surface, each standing for a piece of it (its
+footprint; the wall particles riding on a structure stand on them): a :class:`SurfacePoints`
+along the chains of a 2D surface, a :class:`TrianglePoints` over the triangles of a 3D one.
+
 >>> floor = ContactSurface.polyline([(1.0, 0.0), (0.0, 0.0)])      # right to left: normal up
 >>> floor.normals()
 array([[0., 1.]])
@@ -28,7 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["ContactSurface", "SurfacePoints", "surface_chains", "surface_points"]
+__all__ = ["ContactSurface", "SurfacePoints", "TrianglePoints", "surface_chains", "surface_points"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -258,12 +262,17 @@ def _on_chain(cum: NDArray[np.float64], chain_nodes: NDArray[np.int64], s: float
     return [(int(chain_nodes[i]), 1.0 - f), (int(chain_nodes[i + 1]), f)]
 
 
-def surface_points(surface: ContactSurface, spacing: float) -> SurfacePoints:
-    """Points along each chain of the 2D ``surface`` (total length ``S``): ``k = max(1,
-    round(S/spacing))`` of them at arc lengths ``(j + ½) S/k``, each with the footprint
-    ``[s − S/2k, s + S/2k]`` (see :class:`SurfacePoints`)."""
+def surface_points(surface: ContactSurface, spacing: float) -> SurfacePoints | TrianglePoints:
+    """Points spread evenly over ``surface``, each standing for a piece of it (its footprint).
+
+    2D: along each chain of segments (total length ``S``), ``k = max(1, round(S/spacing))``
+    points at arc lengths ``(j + ½) S/k``, each with the footprint ``[s − S/2k, s + S/2k]``
+    (a :class:`SurfacePoints`). 3D: each triangle split into ``m²`` equal sub-triangles, one
+    point at each one's centroid (a :class:`TrianglePoints`, see :func:`triangle_points`)."""
+    if surface.dim == 3:
+        return triangle_points(surface, spacing)
     if surface.dim != 2:
-        raise ValueError("surface_points: the surface must be 2D")
+        raise ValueError("surface_points: the surface must be 2D or 3D")
     nodes, segs = surface.nodes, surface.facets
     lengths = surface.measures()
     seg_l, xi_l, w_l = [], [], []
@@ -304,3 +313,95 @@ def surface_points(surface: ContactSurface, spacing: float) -> SurfacePoints:
 
     return SurfacePoints(np.concatenate(seg_l), np.concatenate(xi_l), np.concatenate(w_l), matrix(rows_a),
                          matrix(rows_s), matrix(rows_e))
+
+
+@dataclass(frozen=True, eq=False)
+class TrianglePoints:
+    r"""Points spread evenly over a 3D surface of triangles, each standing for a piece of it.
+
+    Each triangle ``t`` of area ``A_t`` is split into ``m_t²`` equal sub-triangles, ``m_t =
+    max(1, round(√A_t/spacing))`` (the lattice of barycentric step ``1/m_t``: ``m_t(m_t + 1)/2``
+    "up" and ``m_t(m_t − 1)/2`` "down" sub-triangles); a point stands at each sub-triangle's
+    centroid and its footprint is that sub-triangle, of area ``A_t/m_t²``. The mean of the
+    surface's linear interpolation over a sub-triangle is its value at the centroid, so a row of
+    ``average`` is the centroid's barycentric weights on the triangle's three nodes (exact).
+
+    The normal of a footprint is its triangle's, from the *current* node positions ``x``:
+
+    .. math:: \mathbf c = (\mathbf x_1 - \mathbf x_0)\times(\mathbf x_2 - \mathbf x_0),\quad
+              \mathbf n = \mathbf c/|\mathbf c|,\quad
+              \dot{\mathbf n} = (\dot{\mathbf c} - (\dot{\mathbf c}\cdot\mathbf n)\,\mathbf n)/|\mathbf c|,
+
+    with :math:`\dot{\mathbf c} = (\mathbf v_1 - \mathbf v_0)\times(\mathbf x_2 - \mathbf x_0)
+    + (\mathbf x_1 - \mathbf x_0)\times(\mathbf v_2 - \mathbf v_0)`, oriented as
+    :meth:`ContactSurface.normals` (out of the body). For a rigid motion with angular velocity
+    :math:`\boldsymbol\omega`, :math:`\dot{\mathbf n} = \boldsymbol\omega\times\mathbf n`.
+
+    Attributes
+    ----------
+    triangle : (n,) int array
+        The triangle (facet of the surface) each point lies on.
+    barycentric : (n, 3) array
+        The point's weights on the triangle's three nodes (in facet order; they sum to 1).
+    area : (n,) array
+        The area of surface each point stands for (m²): its footprint.
+    facets : (k, 3) int array
+        The surface's triangles (node indices), for the normals.
+    average : (n, m) sparse matrix
+        The linear map from node values ``(m, ·)`` to the mean over each footprint.
+
+    >>> tri = ContactSurface(np.array([[0.0, 0, 0], [2, 0, 0], [0, 2, 0]]), np.array([[0, 1, 2]]))
+    >>> pts = triangle_points(tri, 0.5)          # area 2, m = round(√2/0.5) = 3: 9 points
+    >>> float(pts.area.sum()), pts.average.shape, pts.barycentric[0].round(4).tolist()
+    (2.0, (9, 3), [0.7778, 0.1111, 0.1111])
+    """
+
+    triangle: NDArray[np.int64]
+    barycentric: NDArray[np.float64]
+    area: NDArray[np.float64]
+    facets: NDArray[np.int64]
+    average: sp.csr_matrix
+
+    def kinematics(self, x: NDArray[np.float64], v: NDArray[np.float64]
+                   ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Footprint-mean position (m) and velocity (m/s) ``(n, 3)`` of the surface with node
+        positions ``x (m, 3)`` and velocities ``v (m, 3)``, the unit normal of each footprint's
+        triangle and that normal's rate of change (1/s), ``(n, 3)`` (class docstring)."""
+        f = self.facets
+        e1, e2 = x[f[:, 1]] - x[f[:, 0]], x[f[:, 2]] - x[f[:, 0]]
+        c = np.cross(e1, e2)
+        dc = np.cross(v[f[:, 1]] - v[f[:, 0]], e2) + np.cross(e1, v[f[:, 2]] - v[f[:, 0]])
+        size = np.sqrt(np.einsum("ij,ij->i", c, c))[:, None]
+        n = c / size
+        dn = (dc - np.einsum("ij,ij->i", dc, n)[:, None] * n) / size
+        t = self.triangle
+        return self.average @ x, self.average @ v, n[t], dn[t]
+
+
+def triangle_points(surface: ContactSurface, spacing: float) -> TrianglePoints:
+    """The footprints of the 3D ``surface`` at ``spacing`` (m): ``m²`` equal sub-triangles of each
+    triangle, ``m = max(1, round(√A/spacing))``, a point at each centroid (:class:`TrianglePoints`)."""
+    if surface.dim != 3:
+        raise ValueError("triangle_points: the surface must be 3D (triangles)")
+    if not (np.isfinite(spacing) and spacing > 0):
+        raise ValueError(f"triangle_points: spacing must be positive (m), got {spacing!r}")
+    areas = surface.measures()
+    tri_l, bary_l, area_l = [], [], []
+    for t, a in enumerate(areas):
+        m = max(1, round(float(np.sqrt(a) / spacing)))
+        i, j = np.meshgrid(np.arange(m), np.arange(m), indexing="ij")
+        up = i + j <= m - 1
+        down = i + j <= m - 2
+        # centroids (λ1, λ2) of the "up" sub-triangles (i, j), (i+1, j), (i, j+1) and of the
+        # "down" ones (i+1, j), (i, j+1), (i+1, j+1), in units of 1/m
+        l1 = np.concatenate([i[up] + 1.0 / 3.0, i[down] + 2.0 / 3.0]) / m
+        l2 = np.concatenate([j[up] + 1.0 / 3.0, j[down] + 2.0 / 3.0]) / m
+        bary_l.append(np.column_stack([1.0 - l1 - l2, l1, l2]))
+        tri_l.append(np.full(m * m, t, dtype=np.int64))
+        area_l.append(np.full(m * m, a / (m * m)))
+    tri = np.concatenate(tri_l)
+    bary = np.concatenate(bary_l)
+    n = tri.size
+    rows = np.repeat(np.arange(n), 3)
+    average = sp.csr_matrix((bary.ravel(), (rows, surface.facets[tri].ravel())), shape=(n, surface.n_nodes))
+    return TrianglePoints(tri, bary, np.concatenate(area_l), surface.facets.copy(), average)

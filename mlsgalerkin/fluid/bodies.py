@@ -26,7 +26,12 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mlsgalerkin.contact.surface import ContactSurface, SurfacePoints, surface_points
+from mlsgalerkin.contact.surface import (
+    ContactSurface,
+    SurfacePoints,
+    TrianglePoints,
+    surface_points,
+)
 from mlsgalerkin.dynamics import Body
 from mlsgalerkin.motion import Motion
 from mlsgalerkin.neighbors import as_coordinates
@@ -222,12 +227,20 @@ class WallBody(Body):
         positions, velocities, accelerations and normals every step. Built by
         :meth:`on_surface`, which also sets ``anchors``.
     anchors : (n, 4) array, optional
-        For a wall that ``follows`` a surface: the segment of the surface each particle rides on,
-        its position ``ξ`` along it (0 at the segment's first node, 1 at the second), its depth
-        behind the surface (m) and the index of its point in ``footprints``.
-    footprints : :class:`~mlsgalerkin.contact.surface.SurfacePoints`, optional
-        The points along the surface the layers of particles stand on, each with the piece of
-        surface it represents (the maps from the surface's nodes to the particles).
+        For a wall that ``follows`` a surface: the facet of the surface each particle rides on
+        (2D: a segment; 3D: a triangle), its position ``ξ`` along a 2D segment (0 at the
+        segment's first node, 1 at the second; 0 in 3D, where ``footprints.barycentric`` holds
+        the position), its depth behind the surface (m) and the index of its point in
+        ``footprints``.
+    footprints : SurfacePoints or TrianglePoints, optional
+        The points on the surface the layers of particles stand on, each with the piece of
+        surface it represents (the maps from the surface's nodes to the particles):
+        :class:`~mlsgalerkin.contact.surface.SurfacePoints` in 2D,
+        :class:`~mlsgalerkin.contact.surface.TrianglePoints` in 3D.
+    volumes : (n,) array, optional
+        The volume each wall particle integrates (m³; m² per unit depth in 2D), by default
+        ``spacing^d``. :meth:`on_surface` in 3D sets each particle's footprint area times the
+        spacing (a triangle's pieces need not cover ``spacing²`` each).
     """
 
     solver: ClassVar[str] = FLUID_SOLVER
@@ -241,7 +254,8 @@ class WallBody(Body):
     surface: ContactSurface | None = None
     follows: str | None = None
     anchors: NDArray[np.float64] | None = None
-    footprints: SurfacePoints | None = None
+    footprints: SurfacePoints | TrianglePoints | None = None
+    volumes: NDArray[np.float64] | None = None
 
     def __post_init__(self) -> None:
         if self.surface is not None and not isinstance(self.surface, ContactSurface):
@@ -282,6 +296,12 @@ class WallBody(Body):
                 raise ValueError(f"wall body {self.name!r}: give either a surface velocity (a wall that "
                                  "stays in place) or a motion, not both")
         self.velocity = v
+        if self.volumes is not None:
+            vol = np.asarray(self.volumes, dtype=float)
+            if vol.shape != (n,) or not np.all(np.isfinite(vol)) or np.any(vol <= 0):
+                raise ValueError(f"wall body {self.name!r}: volumes must be ({n},) positive finite volumes (m^{d}), "
+                                 f"got shape {vol.shape}")
+            self.volumes = np.ascontiguousarray(vol)
         if self.follows is not None:
             if self.motion is not None or self.surface is not None:
                 raise ValueError(f"wall body {self.name!r}: a wall that follows the surface of {self.follows!r} moves "
@@ -296,37 +316,62 @@ class WallBody(Body):
     @classmethod
     def on_surface(cls, name: str, surface: ContactSurface, spacing: float, follows: str, layers: int = 3,
                    reference_density: float = 1000.0) -> "WallBody":
-        """Wall particles riding on the 2D ``surface`` of the body ``follows`` (its surface at
-        rest, normals out of that body, into the fluid): along each chain of connected segments
-        of total length ``S``, ``k = max(1, round(S/spacing))`` points at arc lengths
-        ``(j + ½) S/k`` (:func:`~mlsgalerkin.contact.surface.surface_points`), each standing for
-        ``S/k`` of surface; a particle sits at the mean of its piece, ``(l + ½) spacing`` behind it
-        along the normal of the piece's chord, for ``layers`` layers ``l``.
+        """Wall particles riding on the 2D or 3D ``surface`` of the body ``follows`` (its surface
+        at rest, normals out of that body, into the fluid), in points each standing for a piece
+        of surface (:func:`~mlsgalerkin.contact.surface.surface_points`):
+
+        - 2D: along each chain of connected segments of total length ``S``, ``k = max(1,
+          round(S/spacing))`` points at arc lengths ``(j + ½) S/k``, each standing for ``S/k``
+          of surface;
+        - 3D: each triangle of area ``A`` split into ``m²`` equal sub-triangles, ``m = max(1,
+          round(√A/spacing))``, a point at each one's centroid standing for ``A/m²`` of surface
+          (:class:`~mlsgalerkin.contact.surface.TrianglePoints`). The particles are about
+          ``area/spacing²`` a layer: exactly when each ``√A/spacing`` is a whole number; the
+          triangles of a square face cut in two (``√A = side/√2``) never are, so each particle
+          integrates its own footprint area times ``spacing`` (``volumes``) instead of
+          ``spacing³``; faces of sides ``spacing·(1, 2)``, ``(2, 4)``... cover evenly.
+
+        A particle sits at the mean of its piece, ``(l + ½) spacing`` behind it along the
+        normal of the piece (2D: of its chord; 3D: of its triangle), for ``layers`` layers ``l``.
 
         >>> plate = ContactSurface.polyline([(1.0, 0.0), (0.0, 0.0)])     # normal up
         >>> w = WallBody.on_surface("plate_walls", plate, 0.25, follows="plate", layers=2)
         >>> w.n, w.positions[:2].tolist(), w.normals[0].tolist()
         (8, [[0.875, -0.125], [0.625, -0.125]], [0.0, 1.0])
+        >>> top = ContactSurface(np.array([[0.0, 0, 0], [0.5, 0, 0], [0, 0.25, 0]]), np.array([[0, 1, 2]]))
+        >>> w = WallBody.on_surface("plate_walls", top, 0.25, follows="plate", layers=2)   # m = 1
+        >>> w.n, w.positions[1].round(4).tolist(), w.normals[0].tolist()
+        (2, [0.1667, 0.0833, -0.375], [0.0, 0.0, 1.0])
         """
-        if not isinstance(surface, ContactSurface) or surface.dim != 2:
-            raise ValueError(f"wall body {name!r}: on_surface needs a 2D ContactSurface")
+        if not isinstance(surface, ContactSurface) or surface.dim not in (2, 3):
+            raise ValueError(f"wall body {name!r}: on_surface needs a 2D or 3D ContactSurface")
         if not (isinstance(spacing, (int, float)) and math.isfinite(spacing) and spacing > 0):
             raise ValueError(f"wall body {name!r}: spacing must be positive (m), got {spacing!r}")
         if not (isinstance(layers, int) and layers >= 1):
             raise ValueError(f"wall body {name!r}: layers must be a positive integer, got {layers!r}")
         total = float(surface.measures().sum())
-        _check_limit((total / spacing + surface.n_facets) * layers, f"wall particles on a surface ({surface.n_facets} "
-                     "segments", spacing)
+        if surface.dim == 2:
+            _check_limit((total / spacing + surface.n_facets) * layers, f"wall particles on a surface "
+                         f"({surface.n_facets} segments", spacing)
+        else:  # each triangle has at most (√A/spacing + ½)² points
+            per = (np.sqrt(surface.measures()) / spacing + 0.5) ** 2
+            _check_limit(float(np.maximum(per, 1.0).sum()) * layers, f"wall particles on a surface "
+                         f"({surface.n_facets} triangles", spacing)
         pts = surface_points(surface, spacing)
-        k = pts.segment.size
+        k = pts.average.shape[0]
         x0, _, n0, _ = pts.kinematics(surface.nodes, np.zeros_like(surface.nodes))
         depth = np.repeat((np.arange(layers) + 0.5) * spacing, k)
-        anchors = np.column_stack([np.tile(pts.segment, layers), np.tile(pts.xi, layers), depth,
+        facet, xi = (pts.segment, pts.xi) if surface.dim == 2 else (pts.triangle, np.zeros(k))
+        anchors = np.column_stack([np.tile(facet, layers), np.tile(xi, layers), depth,
                                    np.tile(np.arange(k), layers)]).astype(float)
         nrm = np.tile(n0, (layers, 1))
         x = np.tile(x0, (layers, 1)) - depth[:, None] * nrm
+        # 3D: each particle integrates its footprint times the spacing (2D footprints are S/k,
+        # within the rounding of k of the spacing, and keep the default spacing²)
+        volumes = None if surface.dim == 2 else np.tile(pts.area * spacing, layers)
         return cls(name, np.ascontiguousarray(x), spacing, normals=np.ascontiguousarray(nrm),
-                   reference_density=reference_density, follows=follows, anchors=anchors, footprints=pts)
+                   reference_density=reference_density, follows=follows, anchors=anchors, footprints=pts,
+                   volumes=volumes)
 
     @property
     def n(self) -> int:

@@ -1,21 +1,23 @@
 r""":class:`StructureCoupling`: the fluid loads a structure, and the structure bounds the fluid.
 
 A structure (any body whose solver exposes a :class:`~mlsgalerkin.dynamics.Surface` with
-segments: an elastic body on scikit-fem, a rigid body) meets a fluid body in two ways, both
-momentum-conserving, both every step:
+facets — segments in 2D, triangles in 3D: an elastic body on scikit-fem, a rigid body) meets a
+fluid body in two ways, both momentum-conserving, both every step, in 2D and in 3D:
 
 1. **Wall particles riding on the structure** (a :class:`~mlsgalerkin.fluid.bodies.WallBody`
    built by :meth:`~mlsgalerkin.fluid.bodies.WallBody.on_surface`, ``follows`` the structure).
-   They stand on points spread evenly along the structure's wet surface
+   They stand on points spread evenly over the structure's wet surface
    (:func:`~mlsgalerkin.contact.surface.surface_points`), each point standing for a piece of
-   surface about one spacing long (its *footprint*), at depths ``δ`` behind it:
+   surface about one spacing long in 2D, or a sub-triangle of about one spacing squared in 3D
+   (its *footprint*), at depths ``δ`` behind it:
 
    .. math:: \mathbf x_w = \bar{\mathbf x}_p - \delta\,\mathbf n_p,\qquad
              \mathbf v_w = \bar{\mathbf v}_p - \delta\,\dot{\mathbf n}_p,\qquad
              \mathbf a_w = \bar{\mathbf a}_p,
 
    with :math:`\bar{(\cdot)}_p = \sum_a W_{pa}(\cdot)_a` the footprint mean over the surface
-   nodes ``a`` and :math:`\mathbf n_p` the normal of the footprint's chord. They are set at the
+   nodes ``a`` and :math:`\mathbf n_p` the normal of the footprint's chord (2D) or of its
+   triangle (3D). They are set at the
    exchange of every step (``t + Δt``, the structure already advanced), with the structure's
    mean velocity and acceleration over the step, so the fluid's wall treatment
    (:class:`~mlsgalerkin.fluid.walls.Walls`) sees the surface move (and, with
@@ -52,7 +54,7 @@ from numpy.typing import NDArray
 
 from mlsgalerkin.contact import PenaltyContact
 from mlsgalerkin.contact.penalty import DEFAULT_ALPHA, DEFAULT_DAMPING, DEFAULT_FEATURE_ANGLE
-from mlsgalerkin.contact.surface import SurfacePoints
+from mlsgalerkin.contact.surface import SurfacePoints, TrianglePoints
 from mlsgalerkin.dynamics import Interaction, Solver, Surface
 from mlsgalerkin.fluid.bodies import FluidBody, WallBody
 
@@ -67,10 +69,11 @@ AITKEN_RANGE = (1e-3, 1.0)
 FloatArray = NDArray[np.float64]
 
 
-def riding_kinematics(surface: Surface, footprints: SurfacePoints, anchors: FloatArray
+def riding_kinematics(surface: Surface, footprints: SurfacePoints | TrianglePoints, anchors: FloatArray
                      ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Positions, velocities, accelerations and normals ``(n, 2)`` of wall particles riding on
-    the 2D ``surface`` at the ``anchors`` (point, depth) of ``footprints`` (module docstring)."""
+    """Positions (m), velocities (m/s), accelerations (m/s²) and normals ``(n, d)`` of wall
+    particles riding on the 2D or 3D ``surface`` at the ``anchors`` (point, depth) of
+    ``footprints`` (module docstring)."""
     x, v, n, dn = footprints.kinematics(surface.positions, surface.velocities)
     point = anchors[:, 3].astype(np.int64)
     depth = anchors[:, 2:3]
@@ -121,12 +124,12 @@ class StructureCoupling(Interaction):
                                       damping=damping, dt_ref=dt_ref, feature_angle=feature_angle,
                                       name=f"{name}_contact")
         self._anchors: FloatArray | None = None
-        self._footprints: SurfacePoints | None = None
+        self._footprints: SurfacePoints | TrianglePoints | None = None
         self._previous: tuple | None = None     # wall kinematics of the last accepted step
         self._pending: tuple | None = None      # ... of this step, until it is accepted
         self.wall_acceleration = wall_acceleration
         self.iterations, self.tolerance, self.relaxation = iterations, tolerance, relaxation
-        self.reaction = np.zeros(2)       # total wall-particle reaction of the last step (N)
+        self.reaction = np.zeros(2)       # total wall-particle reaction of the last step (N; (d,): problems())
         self.contact_force = np.zeros(2)  # total contact force on the structure of the last step (N)
         self.peak_load = 0.0
         self.time_of_peak_load: float | None = None
@@ -160,6 +163,8 @@ class StructureCoupling(Interaction):
         owner = f"StructureCoupling {self.name!r}"
         out = super().problems(scene)
         bodies = {b.name: b for b in scene.bodies}
+        if scene.dim in (2, 3) and self.reaction.shape != (scene.dim,) and not np.any(self.reaction):
+            self.reaction, self.contact_force = np.zeros(scene.dim), np.zeros(scene.dim)
         if self.first in bodies and not isinstance(bodies[self.first], FluidBody):
             out.append(f"{owner}: {self.first!r} must be a FluidBody (the slave side), got "
                        f"{type(bodies[self.first]).__name__}")
@@ -170,6 +175,10 @@ class StructureCoupling(Interaction):
             elif w.follows != self.second:
                 out.append(f"{owner}: the wall body {self.walls!r} must follow {self.second!r} (build it with "
                            f"WallBody.on_surface(..., follows={self.second!r})), it follows {w.follows!r}")
+            elif (isinstance(w.footprints, SurfacePoints) and w.dim != 2) or (
+                    isinstance(w.footprints, TrianglePoints) and w.dim != 3):
+                out.append(f"{owner}: the wall body {self.walls!r} is {w.dim}D but its footprints are those of a "
+                           f"{5 - w.dim}D surface; build it with WallBody.on_surface(...) on the structure's surface")
             else:
                 self._anchors = np.asarray(w.anchors, dtype=float)
                 self._footprints = w.footprints
@@ -286,7 +295,8 @@ class StructureCoupling(Interaction):
         return done
 
     def _record(self, t: float) -> None:
-        contact = np.asarray(self.contact.last.get("force", [0.0, 0.0]), dtype=float)  # on the structure
+        # on the structure
+        contact = np.asarray(self.contact.last.get("force", np.zeros_like(self.reaction)), dtype=float)
         self.contact_force = contact
         load = float(np.linalg.norm(self.reaction + contact))
         if load > self.peak_load:
