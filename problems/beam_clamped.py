@@ -171,8 +171,8 @@ def analyse(result, p: Parameters) -> dict:
         "crossing_period_s": period, "periods_measured": cycles, "period_s": spectral,
         "source_period_s": SOURCE_PERIOD, "euler_bernoulli_period_s": euler_bernoulli_period(p),
         "dry_period_2d_model_s": dry,
-        "period_error_vs_source": period / SOURCE_PERIOD - 1.0 if math.isfinite(period) else None,
-        "period_error_vs_dry_model": period / dry - 1.0 if math.isfinite(period) else None,
+        "period_error_vs_source": spectral / SOURCE_PERIOD - 1.0 if math.isfinite(spectral) else None,
+        "period_error_vs_dry_model": spectral / dry - 1.0 if math.isfinite(spectral) else None,
     }
     period = spectral
     out.update(numerical_dissipation(result, 2.0 * math.sqrt(p.g * p.column_height), p.column_height))

@@ -53,7 +53,7 @@ def cases(section: str, quick: bool) -> tuple[str, list[tuple[str, dict]]]:
                               [("dx=10mm", {"dx": 0.01}), ("dx=5mm", {"dx": 0.005}), ("dx=2.5mm", {"dx": 0.0025})])
     if section == "clamped":
         return "beam_clamped", ([("dx=10mm", {"dx": 0.01, "t_end": 0.2})] if quick else
-                                [("dx=4mm", {"dx": 0.004}), ("dx=2.5mm", {"dx": 0.0025}),
+                                [("dx=4mm", {"dx": 0.004}), ("dx=2.5mm", {"dx": 0.0025}), ("dx=2mm", {"dx": 0.002}),
                                  ("dx=4mm iterated, wall acceleration", {"dx": 0.004, "iterations": 20,
                                                                          "wall_acceleration": 1.0})])
     return "beam_on_spring", ([("dx=60mm", {"dx": 0.06, "t_end": 0.3})] if quick else

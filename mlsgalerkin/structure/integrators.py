@@ -38,6 +38,47 @@ it the same plate diverged.
 Verlet in its constrained coordinates, sub-cycled so that :math:`\omega_n\,\delta t \le 0.05`
 for a hinge spring, with the same ramp of the surface force and moment.
 
+A free 3D body (six degrees of freedom) keeps its orientation as a unit quaternion :math:`q`
+(:math:`R(q)` turns the body from rest, :math:`\mathbf x_a = \mathbf c + R(\mathbf X_a -
+\mathbf c_0)`) and its angular momentum about the centre in the world frame :math:`\mathbf L`
+(kg m²/s, (3,)). With the inertia tensor at rest :math:`I_c = E\,\mathrm{diag}(I_1, I_2, I_3)E^{\mathsf T}`
+(principal moments :math:`I_i` in kg m², ascending; principal axes :math:`\mathbf u_i = E\mathbf e_i`
+in the rest frame, :math:`\det E = 1`), a sub-step :math:`\delta t` (s) is the kick–rotate–kick
+splitting of Dullweber, Leimkuhler & McLachlan (1997, J. Chem. Phys. 107, 5840), with the
+translation by velocity Verlet:
+
+.. math:: \mathbf V \mathrel{+}= \tfrac{\delta t}2\mathbf A_k,\quad
+          \mathbf L \mathrel{+}= \tfrac{\delta t}2\mathbf M_k,\quad
+          \mathbf c \mathrel{+}= \delta t\,\mathbf V,\quad
+          q \leftarrow \Phi^{1}_{\delta t/2}\circ\Phi^{2}_{\delta t/2}\circ\Phi^{3}_{\delta t}
+          \circ\Phi^{2}_{\delta t/2}\circ\Phi^{1}_{\delta t/2}\,(q),\quad
+          \mathbf V \mathrel{+}= \tfrac{\delta t}2\mathbf A_{k+1},\quad
+          \mathbf L \mathrel{+}= \tfrac{\delta t}2\mathbf M_{k+1},
+
+with :math:`\mathbf A = \mathbf F/m + \mathbf g` and :math:`\mathbf M` (N m, world frame, about
+the centre) the ramped surface load at the sub-step's ends. :math:`\Phi^i_\tau` is the exact
+flow of :math:`T_i = \Pi_i^2/(2I_i)`, one part of the kinetic energy of the free body
+:math:`T = \sum_i T_i`: a rotation about the principal axis :math:`\mathbf u_i` by the angle
+:math:`\varphi = \tau\,\Pi_i/I_i`, :math:`\Pi_i = \mathbf u_i\cdot R(q)^{\mathsf T}\mathbf L`
+(kg m²/s, the principal component in the body frame, constant along :math:`\Phi^i`),
+
+.. math:: q \leftarrow q\otimes\bigl(\cos\tfrac\varphi2,\ \sin\tfrac\varphi2\,\mathbf u_i\bigr),
+
+which leaves :math:`\mathbf L` in the world frame unchanged (in the body frame
+:math:`\boldsymbol\Pi` turns by :math:`-\varphi` about :math:`\mathbf u_i`); :math:`q` is
+renormalised after the sub-step. The scheme is explicit, symplectic, time-reversible and second
+order; without torque it keeps :math:`\mathbf L` exactly (to round-off) and the kinetic energy
+within :math:`O(\delta t^2)` without drift. It sub-cycles so that :math:`|\boldsymbol\omega|\,
+\delta t \le 0.05` at the step's start. After the sub-step the world angular velocity and
+acceleration (for the surface's velocities and accelerations) are
+
+.. math:: \boldsymbol\omega = I_w^{-1}\mathbf L,\qquad
+          \boldsymbol\alpha = I_w^{-1}(\mathbf M - \boldsymbol\omega\times\mathbf L),\qquad
+          I_w = R\,I_c R^{\mathsf T},
+
+and the rotational work of the surface load over a sub-step is
+:math:`\tfrac12(\mathbf M_k + \mathbf M_{k+1})\cdot\tfrac12(\boldsymbol\omega_k + \boldsymbol\omega_{k+1})\,\delta t`.
+
 Both keep the work of the surface forces (the ramp's mean force on the step's displacement of
 the surface nodes) for the energy balance of a coupled run.
 """
@@ -60,7 +101,7 @@ from mlsgalerkin.structure.elastic import ElasticBody
 from mlsgalerkin.structure.explicit import subcycle_linear
 from mlsgalerkin.structure.rigid import Hinge, RigidBody
 
-__all__ = ["SUBSTEP_SAFETY", "ElasticMotion", "RigidMotion"]
+__all__ = ["SUBSTEP_SAFETY", "ElasticMotion", "RigidMotion", "free_rotation", "quaternion_matrix"]
 
 FloatArray = NDArray[np.float64]
 
@@ -74,13 +115,46 @@ NONLINEAR_ORDER = 4
 #: and made for ``NEWMARK_MARGIN`` times the step that asks for a new one.
 NEWMARK_REUSE = 1.01
 NEWMARK_MARGIN = 1.005
-#: Largest ``ω δt`` of a rigid body's sub-steps on its hinge spring.
+#: Largest ``ω δt`` of a rigid body's sub-steps on its hinge spring, and of a free 3D body's
+#: spin ``|ω| δt`` (rad).
 RIGID_PHASE_PER_SUBSTEP = 0.05
+#: The free rotation's splitting ``Φ¹_{δt/2} Φ²_{δt/2} Φ³_{δt} Φ²_{δt/2} Φ¹_{δt/2}``: (principal
+#: axis, fraction of the sub-step) in the order applied, principal moments ascending.
+FREE_ROTATION_SPLITTING = ((0, 0.5), (1, 0.5), (2, 1.0), (1, 0.5), (0, 0.5))
 
 
 def _cross(r: FloatArray, f: FloatArray) -> FloatArray:
     """``r × f`` (z-component) of ``(n, 2)`` rows."""
     return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
+
+
+def quaternion_matrix(q: FloatArray) -> FloatArray:
+    """The rotation matrix (3, 3) of the unit quaternion ``q = (w, x, y, z)``."""
+    w, x, y, z = q
+    return np.array([[1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)],
+                     [2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)],
+                     [2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)]])
+
+
+def _quaternion_product(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Hamilton's product ``a ⊗ b`` (the rotation ``R(a) R(b)``)."""
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return np.array([aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+                     aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw])
+
+
+def free_rotation(q: FloatArray, L: FloatArray, axes: FloatArray, moments: FloatArray, h: float) -> FloatArray:
+    """The orientation ``q`` (unit quaternion) after the torque-free motion over ``h`` (s) with the
+    world angular momentum ``L`` (kg m²/s, unchanged), by the splitting of Dullweber, Leimkuhler
+    & McLachlan (1997) (module docstring): exact rotations about the principal ``axes`` (columns
+    of (3, 3), rest frame) with the principal ``moments`` (3,) (kg m²); renormalised."""
+    for i, part in FREE_ROTATION_SPLITTING:
+        u = axes[:, i]
+        phi = part * h * float(u @ (quaternion_matrix(q).T @ L)) / moments[i]
+        s = math.sin(0.5 * phi)
+        q = _quaternion_product(q, np.array([math.cos(0.5 * phi), s * u[0], s * u[1], s * u[2]]))
+    return q / math.sqrt(float(q @ q))
 
 
 class ElasticMotion:
@@ -336,7 +410,12 @@ class ElasticMotion:
 
 
 class RigidMotion:
-    """State and integrator of one :class:`RigidBody` (module docstring)."""
+    """State and integrator of one :class:`RigidBody` (module docstring).
+
+    A free 3D body (``body.free_rotation``) keeps the orientation ``q`` (unit quaternion, (4,)),
+    the world angular momentum about the centre ``L`` (kg m²/s, (3,)), and ``omega``, ``alpha``,
+    ``M`` as world (3,) vectors (rad/s, rad/s², N m); its ``theta`` stays 0 (the ``angle``
+    observable is the angle of ``q``). The other bodies keep scalars about their axis."""
 
     kind = "rigid"
 
@@ -347,15 +426,33 @@ class RigidMotion:
         self.c = body.centre.copy()
         self.theta = 0.0
         self.V = body.velocity.copy()
-        self.omega = float(body.angular_velocity)
+        self.free3d = body.free_rotation
         d = body.dim
         self.dim = d
         self.A = np.zeros(d)          # acceleration of the centre under the body's own forces (m/s²)
-        self.alpha = 0.0              # and angular acceleration about the axis (rad/s²)
         self.F = np.zeros(d)          # resultant of the surface forces of the last exchange (N)
-        self.M = 0.0                  # their moment about the centre of mass, about the axis (N m)
         self.F_last = np.zeros(d)     # resultant and moment of the exchange before, for the extrapolation
-        self.M_last = 0.0
+        if self.free3d:
+            self.omega = np.array(body.angular_velocity, dtype=float)   # world angular velocity (rad/s)
+            self.alpha = np.zeros(3)  # world angular acceleration (rad/s²)
+            self.M = np.zeros(3)      # moment of the surface forces about the centre, world frame (N m)
+            self.M_last = np.zeros(3)
+            self.q = np.array([1.0, 0.0, 0.0, 0.0])   # orientation from rest (unit quaternion)
+            tensor = body.inertia_tensor()
+            if np.count_nonzero(tensor - np.diag(np.diag(tensor))) == 0:
+                # principal at rest along x, y, z: exact axes (a permutation, no round-off)
+                order = np.argsort(np.diag(tensor), kind="stable")
+                self.moments, self.axes = np.diag(tensor)[order], np.eye(3)[:, order]
+            else:
+                self.moments, self.axes = np.linalg.eigh(tensor)
+            if np.linalg.det(self.axes) < 0:
+                self.axes[:, 2] = -self.axes[:, 2]
+            self.L = tensor @ self.omega                 # at rest R = 1: L = I_c ω
+        else:
+            self.omega = float(body.angular_velocity)
+            self.alpha = 0.0          # angular acceleration about the axis (rad/s²)
+            self.M = 0.0              # moment of the surface forces about the centre of mass, about the axis (N m)
+            self.M_last = 0.0
         self._end: tuple[FloatArray, float] | None = None
         self.dt_prev = 0.0
         self.work = 0.0
@@ -371,7 +468,7 @@ class RigidMotion:
             self.omega_n = math.sqrt(max(body.natural_frequency_squared(), 0.0))
         else:
             self.p = None
-            self.I = body.inertia
+            self.I = body.inertia_tensor() if self.free3d else body.axis_inertia(self.axis)
             self.omega_n = 0.0
 
     @property
@@ -403,9 +500,30 @@ class RigidMotion:
         """The axis in the body's dimension (zero in 2D: no component of ``r`` lies along it)."""
         return np.zeros(2) if self.dim == 2 else self.axis
 
+    def rotation(self) -> FloatArray:
+        """The body's rotation from rest now: (2, 2) or (3, 3)."""
+        if self.free3d:
+            return quaternion_matrix(self.q)
+        return self._rotation(self.theta)
+
     def nodes(self) -> FloatArray:
         """Surface node positions ``(m, d)`` now (m)."""
-        return self.c + (self.X - self.c0) @ self._rotation(self.theta).T
+        return self.c + (self.X - self.c0) @ self.rotation().T
+
+    def body_angular_velocity(self) -> FloatArray:
+        """A free 3D body's angular velocity in its own frame (the rest frame turned with it),
+        ``Rᵀω = I_c⁻¹ Rᵀ L`` (rad/s, (3,))."""
+        if not self.free3d:
+            raise ValueError(f"rigid body {self.body.name!r}: only a free 3D body has a body-frame angular velocity")
+        principal = self.axes.T @ (quaternion_matrix(self.q).T @ self.L)
+        return self.axes @ (principal / self.moments)
+
+    def _spin(self, M: FloatArray) -> None:
+        """A free 3D body's world ``ω = I_w⁻¹ L`` and ``α = I_w⁻¹(M − ω × L)`` under the moment
+        ``M`` about the centre (module docstring), ``I_w = R I_c Rᵀ``."""
+        P = quaternion_matrix(self.q) @ self.axes        # principal frame → world
+        self.omega = P @ ((P.T @ self.L) / self.moments)
+        self.alpha = P @ ((P.T @ (M - np.cross(self.omega, self.L))) / self.moments)
 
     def _generalised(self, F: FloatArray, M: float) -> tuple[FloatArray, float]:
         """Acceleration of the centre and angular acceleration from a force ``F`` and a moment
@@ -436,6 +554,10 @@ class RigidMotion:
             self.A, self.alpha = self._generalised(m * self.g, 0.0)
 
     def start(self) -> None:
+        if self.free3d:
+            self.A = self.F / self.body.mass + self.g
+            self._spin(self.M)
+            return
         self._accelerations(self.F, self.M)
 
     def _accelerations(self, F: FloatArray, M: float) -> None:
@@ -449,15 +571,19 @@ class RigidMotion:
         exchange's to their extrapolation at the step's end (module docstring)."""
         t0 = time.perf_counter()
         con = self.body.constraint
-        F0, M0 = self.F.copy(), self.M
+        F0, M0 = self.F.copy(), (self.M.copy() if self.free3d else self.M)
         if self._end is not None:
             (F1, M1), self._end = self._end, None
         elif self.dt_prev > 0:
             F1 = F0 + (dt / self.dt_prev) * (F0 - self.F_last)
             M1 = M0 + (dt / self.dt_prev) * (M0 - self.M_last)
         else:
-            F1, M1 = F0.copy(), M0
+            F1, M1 = F0.copy(), (M0.copy() if self.free3d else M0)
         self.F_last, self.M_last, self.dt_prev = F0, M0, dt
+        if self.free3d:
+            self._advance_free(dt, F0, F1, M0, M1)
+            self.seconds += time.perf_counter() - t0
+            return
         c_start, theta_start = self.c.copy(), self.theta
         n = 1
         if self.omega_n > 0:
@@ -489,7 +615,41 @@ class RigidMotion:
         self.outer_steps += 1
         self.seconds += time.perf_counter() - t0
 
+    def _advance_free(self, dt: float, F0: FloatArray, F1: FloatArray, M0: FloatArray, M1: FloatArray) -> None:
+        """A free 3D body over ``dt`` (s): velocity Verlet for the centre and the kick–rotate–kick
+        splitting for the rotation (module docstring), the load ramped from ``F0, M0`` to
+        ``F1, M1`` (N, N m, world frame)."""
+        m, g = self.body.mass, self.g
+        spin = math.sqrt(float(self.omega @ self.omega))
+        n = max(1, math.ceil(dt * spin / RIGID_PHASE_PER_SUBSTEP * (1.0 - 1e-12)))
+        h = dt / n
+        c_start = self.c.copy()
+        self.A = F0 / m + g
+        M_start, rotational_work = M0, 0.0
+        for k in range(n):
+            ramp = (k + 1.0) / n
+            F, M = F0 + ramp * (F1 - F0), M0 + ramp * (M1 - M0)
+            omega_start = self.omega
+            self.V = self.V + 0.5 * h * self.A
+            self.L = self.L + 0.5 * h * M_start
+            self.c = self.c + h * self.V
+            self.q = free_rotation(self.q, self.L, self.axes, self.moments, h)
+            self.A = F / m + g
+            self.V = self.V + 0.5 * h * self.A
+            self.L = self.L + 0.5 * h * M
+            self._spin(M)
+            rotational_work += 0.25 * h * float((M_start + M) @ (omega_start + self.omega))
+            M_start = M
+        self.work += float(0.5 * (F0 + F1) @ (self.c - c_start)) + rotational_work
+        self.substeps += n
+        self.outer_steps += 1
+
     def surface(self) -> Surface:
+        if self.free3d:
+            r = self.nodes() - self.c
+            v = self.V + np.cross(self.omega, r)
+            a = self.A + np.cross(self.alpha, r) + np.cross(self.omega, np.cross(self.omega, r))
+            return Surface(self.body.name, self.c + r, v, self.body.surface.facets, None, a)
         r = self.nodes() - self.c
         perp = self._turn(r)
         e = self._axis_d()
@@ -497,28 +657,43 @@ class RigidMotion:
         a = self.A + self.alpha * perp - self.omega**2 * (r - np.outer(r @ e, e))
         return Surface(self.body.name, self.c + r, v, self.body.surface.facets, None, a)
 
-    def step_end_load(self) -> tuple[FloatArray, float]:
-        """The resultant and moment of the surface forces added since the last clear."""
-        return self.F.copy(), self.M
+    def step_end_load(self) -> tuple[FloatArray, float | FloatArray]:
+        """The resultant and moment of the surface forces added since the last clear (the moment
+        a world (3,) vector for a free 3D body)."""
+        return self.F.copy(), (self.M.copy() if self.free3d else self.M)
 
-    def set_step_end_load(self, load: tuple[FloatArray, float]) -> None:
+    def set_step_end_load(self, load: tuple[FloatArray, float | FloatArray]) -> None:
         """Use ``load`` (resultant, moment) at the end of the next step instead of the extrapolation."""
-        self._end = (np.asarray(load[0], dtype=float).copy(), float(load[1]))
+        M = np.array(load[1], dtype=float) if self.free3d else float(load[1])
+        self._end = (np.asarray(load[0], dtype=float).copy(), M)
 
     def add_forces(self, forces: FloatArray) -> None:
         r = self.nodes() - self.c
         self.F = self.F + forces.sum(axis=0)
-        self.M += float(np.sum(self._torque(r, forces)))
+        if self.free3d:
+            self.M = self.M + np.cross(r, forces).sum(axis=0)
+        else:
+            self.M += float(np.sum(self._torque(r, forces)))
 
     def clear_forces(self) -> None:
-        self.F = np.zeros(2)
-        self.M = 0.0
+        self.F = np.zeros(self.dim)
+        self.M = np.zeros(3) if self.free3d else 0.0
 
     def kinetic_energy(self) -> float:
+        """``½ m V² + ½ ω·L`` (J, per unit depth in 2D; ``½ I_p ω²`` on a hinge)."""
         b = self.body
         if isinstance(b.constraint, Hinge):
             return 0.5 * self.I * self.omega**2
-        return 0.5 * b.mass * float(self.V @ self.V) + 0.5 * b.inertia * self.omega**2
+        if self.free3d:
+            return 0.5 * b.mass * float(self.V @ self.V) + 0.5 * float(self.omega @ self.L)
+        return 0.5 * b.mass * float(self.V @ self.V) + 0.5 * self.I * self.omega**2
+
+    def angle(self) -> float:
+        """The angle turned from rest (rad): ``θ`` about the axis, or a free 3D body's rotation
+        angle ``2 atan2(|q_xyz|, |q_w|)`` in ``[0, π]``."""
+        if self.free3d:
+            return 2.0 * math.atan2(math.sqrt(float(self.q[1:] @ self.q[1:])), abs(float(self.q[0])))
+        return self.theta
 
     def energies(self) -> dict[str, float]:
         b = self.body
@@ -528,11 +703,22 @@ class RigidMotion:
                 "weight_potential": -b.mass * float(self.g @ (self.c - self.c0)), "surface_work": self.work}
 
     def observables(self) -> dict[str, float]:
+        """Energies, the centre's displacement ``x|y|z`` (m), velocity ``vx|vy|vz`` (m/s), the
+        surface load ``force_x|y|z`` (N); ``angle``, ``omega``, ``moment`` about the axis, or for a
+        free 3D body ``angle`` (of its rotation from rest) and the world vectors ``omega_x|y|z``
+        (rad/s), ``moment_x|y|z`` (N m about the centre) and ``angular_momentum_x|y|z``
+        (kg m²/s)."""
         row = self.energies()
         d = self.c - self.c0
         for k in range(self.dim):
             a = "xyz"[k]
             row[a], row[f"v{a}"], row[f"force_{a}"] = float(d[k]), float(self.V[k]), float(self.F[k])
+        if self.free3d:
+            row["angle"] = self.angle()
+            for k, a in enumerate("xyz"):
+                row[f"omega_{a}"], row[f"moment_{a}"] = float(self.omega[k]), float(self.M[k])
+                row[f"angular_momentum_{a}"] = float(self.L[k])
+            return row
         row.update({"angle": self.theta, "omega": self.omega, "moment": self.M})
         return row
 
@@ -551,9 +737,16 @@ class RigidMotion:
         return ("line" if self.dim == 2 else "triangle"), self.body.surface.facets.astype(np.int64)
 
     def finite(self) -> bool:
+        if self.free3d:
+            return bool(all(np.all(np.isfinite(x)) for x in (self.c, self.V, self.q, self.L)))
         return bool(np.all(np.isfinite(self.c)) and math.isfinite(self.theta) and math.isfinite(self.omega))
 
     def checkpoint(self) -> dict[str, FloatArray]:
+        if self.free3d:
+            return {"c": self.c.copy(), "V": self.V.copy(), "A": self.A.copy(), "F": self.F.copy(),
+                    "F_last": self.F_last.copy(), "q": self.q.copy(), "L": self.L.copy(), "omega": self.omega.copy(),
+                    "alpha": self.alpha.copy(), "M": self.M.copy(), "M_last": self.M_last.copy(),
+                    "counters": np.array([self.work, self.dt_prev, self.substeps, self.outer_steps], dtype=float)}
         return {"c": self.c.copy(), "V": self.V.copy(), "A": self.A.copy(), "F": self.F.copy(),
                 "F_last": self.F_last.copy(),
                 "scalars": np.array([self.theta, self.omega, self.alpha, self.M, self.M_last, self.work, self.dt_prev,
@@ -561,6 +754,12 @@ class RigidMotion:
 
     def restore(self, arrays: dict[str, FloatArray]) -> None:
         self.c, self.V, self.A, self.F, self.F_last = (arrays[k].copy() for k in ("c", "V", "A", "F", "F_last"))
+        if self.free3d:
+            self.q, self.L, self.omega, self.alpha, self.M, self.M_last = (
+                np.array(arrays[k], dtype=float) for k in ("q", "L", "omega", "alpha", "M", "M_last"))
+            work, dt_prev, sub, outer = arrays["counters"]
+            self.work, self.dt_prev, self.substeps, self.outer_steps = float(work), float(dt_prev), int(sub), int(outer)
+            return
         th, om, al, M, M_last, work, dt_prev, sub, outer = arrays["scalars"]
         self.theta, self.omega, self.alpha, self.M, self.M_last = float(th), float(om), float(al), float(M), float(M_last)
         self.work, self.dt_prev = float(work), float(dt_prev)
@@ -569,7 +768,9 @@ class RigidMotion:
     def summary(self) -> dict[str, Any]:
         b = self.body
         con = b.constraint
+        inertia = np.asarray(self.I).tolist() if self.free3d or np.ndim(self.I) else self.I
+        principal = {"principal_inertia_kg_m2": self.moments.tolist()} if self.free3d else {}
         return {"kind": "rigid", "constraint": repr(con) if isinstance(con, Hinge) else con, "mass_kg": b.mass,
-                "inertia_kg_m2": self.I, "natural_period_s": b.natural_period() if isinstance(con, Hinge) else None,
+                "inertia_kg_m2": inertia, **principal, "natural_period_s": b.natural_period() if isinstance(con, Hinge) else None,
                 "outer_steps": self.outer_steps, "substeps": self.substeps, "time_s": self.seconds,
                 **{f"end_{k}_J": v for k, v in self.energies().items()}}

@@ -4,7 +4,8 @@ Per outer step (:mod:`mlsgalerkin.dynamics`):
 
 - ``begin_step(t, Δt)``: every body advances to ``t + Δt`` with the surface forces of the last
   exchange held (:mod:`mlsgalerkin.structure.integrators`: sub-cycled central differences,
-  Newmark, or rigid-body Verlet);
+  Newmark, or rigid-body Verlet, with the splitting of Dullweber, Leimkuhler & McLachlan 1997
+  for the rotation of a free 3D body);
 - the interactions read each body's :class:`~mlsgalerkin.dynamics.Surface` at ``t + Δt``
   (positions, velocities, accelerations, segments, nodal masses) and add forces to its surface
   nodes (cleared first, then accumulated over the exchange and the after-step exchange);
@@ -18,10 +19,12 @@ staggered; its time-step limit comes from the interactions (penalty contact) and
 Time-series columns per body ``<name>``: ``<name>_kinetic_energy``, ``<name>_strain_energy``
 (elastic) or ``<name>_spring_energy`` (hinge), ``<name>_weight_potential``,
 ``<name>_surface_work`` (J per unit depth), the named points' ``<name>_<point>_ux|uy`` (m),
-and for rigid bodies ``<name>_x|y`` (displacement of the centre of mass, m), ``_angle`` (rad),
-``_vx|vy`` (m/s), ``_omega`` (rad/s), ``_force_x|y`` (N) and ``_moment`` (N m) of the surface
-forces. Frames: ``structure.pvd``, the mesh nodes (elastic) and surface nodes (rigid) with
-displacement, velocity and the body index.
+and for rigid bodies ``<name>_x|y|z`` (displacement of the centre of mass, m), ``_angle`` (rad),
+``_vx|vy|vz`` (m/s), ``_omega`` (rad/s), ``_force_x|y|z`` (N) and ``_moment`` (N m) of the surface
+forces; a free 3D body has the world vectors ``_omega_x|y|z`` (rad/s), ``_moment_x|y|z`` (N m)
+and ``_angular_momentum_x|y|z`` (kg m²/s) instead of ``_omega`` and ``_moment``, and ``_angle``
+is the angle of its rotation from rest. Frames: ``structure.pvd``, the mesh nodes (elastic) and
+surface nodes (rigid) with displacement, velocity and the body index.
 """
 
 from __future__ import annotations
