@@ -105,7 +105,7 @@ ENTRIES: tuple[Entry, ...] = (
           "Dam break through an elastic gate",
           "The rubber gate of Antoci et al. (2007), clamped at its top, 0.16 s after the water (0.14 m "
           "deep) was let against it: the gate (dark blue: its finite-element nodes, neo-Hookean) is "
-          "bent open by about 4 cm and the water jets out under its free end along the floor."),
+          "bent open by about 5 cm and the water jets out under its free end along the floor."),
     Entry("wedge_drop", {"dx": 0.01, "t_end": 0.015, "frame_every": 0.015}, "pressure",
           "Wedge water entry",
           "A rigid 30° wedge of 241 kg per metre (Zhao, Faltinsen & Aarsnes 1996) 15 ms after its keel "

@@ -8,7 +8,6 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import io
-import time
 
 import numpy as np
 import pytest
@@ -151,14 +150,22 @@ def test_the_table_holds_at_least_sixty_cases():
 
 
 @pytest.mark.parametrize("name, args, fragment", CLI_CASES, ids=[c[0] for c in CLI_CASES])
-def test_bad_command_line_input_is_refused_clearly_and_at_once(workdir, name, args, fragment):
+def test_bad_command_line_input_is_refused_clearly_and_at_once(workdir, name, args, fragment, monkeypatch):
+    """Refused with a clear message and exit status 2 before any simulation starts
+    (``Simulation.start``: the state, neighbours and shape functions). A timing bound here failed
+    on a loaded machine with a cold numba cache: the check is that no run starts, not how long
+    the refusal takes."""
     args = [a.replace("{tmp}", str(workdir)) for a in args]
-    t0 = time.perf_counter()
+
+    def started(*_args, **_kwargs):
+        raise AssertionError("a simulation started before the bad input was refused")
+
+    monkeypatch.setattr(Simulation, "start", started)
     code, text = run_cli(["run", *args, "--no-progress"])
     assert code == 2, text
     assert fragment in text, text
     assert "Traceback" not in text
-    assert time.perf_counter() - t0 < 20  # refused before any real work (no 1e8-particle allocation)
+    assert "a simulation started" not in text
 
 
 # ------------------------------------------------------------------ scenes built in Python

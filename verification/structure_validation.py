@@ -30,6 +30,8 @@ from mlsgalerkin.problem import load_problem
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from verification.fluid_core import runner, write_table
 
+#: Young's moduli (MPa) of the gate scanned for the least-squares fit of the experiment's record.
+FIT_YOUNG_MPA = (4.0, 4.5, 5.5)       # and 5.0 (the default) and 6.08, 7.8 from the cases above
 SECTIONS = ("plate", "gate", "wedge", "clamped", "spring")
 REPORT = "structure"
 COMMON = ["case", "status", "fluid_particles", "steps", "t_reached_s", "max_penetration_dx",
@@ -44,10 +46,13 @@ def cases(section: str, quick: bool) -> tuple[str, list[tuple[str, dict]]]:
     if section == "gate":
         if quick:
             return "elastic_gate", [("dx=5mm", {"dx": 0.005, "t_end": 0.05})]
-        return "elastic_gate", [("dx=2mm E=7.8MPa", {"dx": 0.002}), ("dx=1mm E=7.8MPa", {"dx": 0.001}),
+        return "elastic_gate", ([("dx=2mm E=5MPa", {"dx": 0.002}), ("dx=1mm E=5MPa", {"dx": 0.001}),
+                                ("dx=2mm E=7.8MPa", {"dx": 0.002, "young": 7.8e6}),
+                                ("dx=1mm E=7.8MPa", {"dx": 0.001, "young": 7.8e6}),
                                 ("dx=2mm E=10MPa nu=0.49", {"dx": 0.002, "young": 10e6, "poisson": 0.49}),
                                 ("dx=2mm E=12MPa nu=0.4", {"dx": 0.002, "young": 12e6, "poisson": 0.4}),
                                 ("dx=2mm E=6.08MPa", {"dx": 0.002, "young": 6.08e6})]
+                               + [(f"dx=2mm E={e:g}MPa fit", {"dx": 0.002, "young": e * 1e6}) for e in FIT_YOUNG_MPA])
     if section == "wedge":
         return "wedge_drop", ([("dx=40mm", {"dx": 0.04, "t_end": 0.005})] if quick else
                               [("dx=10mm", {"dx": 0.01}), ("dx=5mm", {"dx": 0.005}), ("dx=2.5mm", {"dx": 0.0025})])
@@ -85,9 +90,11 @@ NOTES = {
     "gate": "Goal: the peak of tip_x within 10 % and its time within 0.03 s of the experiment (Antoci et al. 2007). "
             "The experiment's tip_x has a broad maximum (44.0 mm at 0.119 s, 46.4 mm at 0.161 s, 44.2 mm at 0.200 s), "
             "so the time of its peak is poorly defined; the RMS differences over the record are listed beside it. "
-            "E = 7.8 MPa is fitted to this experiment by later studies; 10 and 12 MPa are the other published values; "
-            "6.08 MPa (a sensitivity run, not a published value) is the plane-strain modulus whose bending stiffness "
-            "equals plane stress at 7.8 MPa.",
+            "E = 5 MPa (the default) is identified for this plane-strain model by least squares on this record "
+            "(the 'fit' rows, 4-7.8 MPa at 2 mm: the smallest RMS of tip_x and tip_y together), so its agreement is "
+            "a calibration of one constant, not a prediction. The published values are 7.8 MPa (itself identified "
+            "from this experiment by later studies), 10 and 12 MPa; 6.08 MPa is the plane-strain modulus whose "
+            "bending stiffness equals plane stress at 7.8 MPa.",
     "wedge": "Goal: the velocity within 3 % at every reference time, the peak force within 15 % and its time within "
              "3 ms (Zhao et al. 1996; force on the 0.2 m section). The digitised data are read to about +-250 N and "
              "+-0.05 m/s; integrating the measured force with the 241 kg/m mass gives a velocity at 25 ms 3.6 % below "
@@ -118,6 +125,8 @@ def plot(section: str, out: Path, rows: list[dict]) -> None:
         fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
         for ax, c in zip(axes, ("x", "y")):
             for label, ts in series:
+                if label.endswith(" fit"):      # the scan of the fit: in the table only
+                    continue
                 ax.plot(ts["time"], 1e3 * np.asarray(ts[f"tip_{c}"]), lw=1.2, label=label)
             ax.plot(ref[c][:, 0], 1e3 * ref[c][:, 1], "ko", label="Antoci et al. 2007")
             ax.set_xlabel("t (s)")
@@ -205,7 +214,7 @@ def gate_quasi_static(out: Path, rows: list[dict]) -> None:
              "tip_y_static_mm | tip_y_experiment_mm |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         run_dir = Path(r.get("run_dir") or "")
-        if not (run_dir / "particles.pvd").is_file() or "young_Pa" not in r:
+        if not (run_dir / "particles.pvd").is_file() or "young_Pa" not in r or r["case"].endswith(" fit"):
             continue
         saved = json.loads((run_dir / "summary.json").read_text())["parameters"]
         p = gate.Parameters(**{k: v for k, v in saved.items() if k in gate.Parameters.__dataclass_fields__})
