@@ -64,7 +64,8 @@ def cases(section: str, quick: bool) -> tuple[str, list[tuple[str, dict]]]:
     return "beam_on_spring", ([("dx=60mm", {"dx": 0.06, "t_end": 0.3})] if quick else
                               [("dx=30mm", {"dx": 0.03}), ("dx=15mm", {"dx": 0.015}),
                                ("dx=30mm fixed", {"dx": 0.03, "support": "fixed"}),
-                               ("dx=15mm fixed", {"dx": 0.015, "support": "fixed"})])
+                               ("dx=15mm fixed", {"dx": 0.015, "support": "fixed"}),
+                               ("dx=7.5mm fixed", {"dx": 0.0075, "support": "fixed", "t_end": 6.0})])
 
 
 COLUMNS = {
