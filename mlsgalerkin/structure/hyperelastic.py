@@ -294,13 +294,16 @@ def _element_forces(dofs, grads, weights, u, lam, mu, model):
 
 @numba.njit(cache=True)
 def _scatter(dofs, fe, n):
+    """Element-local forces ``fe (n_elements, n_local, d)`` summed into the global ``(n,)``
+    vector of interleaved degrees of freedom ``d s + c`` (serial: no write races)."""
     f = np.zeros(n)
     ne, na = dofs.shape
+    d = fe.shape[2]
     for e in range(ne):
         for a in range(na):
             s = dofs[e, a]
-            f[2 * s] += fe[e, a, 0]
-            f[2 * s + 1] += fe[e, a, 1]
+            for c in range(d):
+                f[d * s + c] += fe[e, a, c]
     return f
 
 
@@ -412,19 +415,6 @@ def _element_forces_3d(dofs, grads, weights, u, lam, mu, model):
     return fe, energy, jmin
 
 
-@numba.njit(cache=True)
-def _scatter_3d(dofs, fe, n):
-    f = np.zeros(n)
-    ne, na = dofs.shape
-    for e in range(ne):
-        for a in range(na):
-            s = dofs[e, a]
-            f[3 * s] += fe[e, a, 0]
-            f[3 * s + 1] += fe[e, a, 1]
-            f[3 * s + 2] += fe[e, a, 2]
-    return f
-
-
 def _inverted(where: str, model: str, elements: IntArray, jmin: FloatArray) -> InvertedElementError:
     bad = np.flatnonzero(jmin <= 0.0)
     worst = bad[np.argmin(jmin[bad])]
@@ -459,8 +449,6 @@ def internal_force(data: QuadratureData, u: FloatArray, lam: float, mu: float, m
     over ``data``, the 2D or the 3D kernel by ``data.dim``. Raises :class:`InvertedElementError`
     if an element has :math:`J \\le 0`."""
     fe, _ = _run(data, u, lam, mu, model, "internal_force")
-    if data.dim == 3:
-        return _scatter_3d(data.dofs, fe, data.n_dofs)
     return _scatter(data.dofs, fe, data.n_dofs)
 
 
