@@ -211,6 +211,11 @@ class Interaction(ABC):
         """Diagnostics for ``summary.json``."""
         return {}
 
+    def observables(self) -> dict[str, float]:
+        """Time-series quantities of this interaction (columns of ``timeseries.csv``; the same
+        keys from the start, before the first exchange): e.g. the energy stored in its contact."""
+        return {}
+
     def state_dict(self) -> dict[str, Any]:
         """What a restart needs to continue bit for bit (JSON-serialisable; stored in every
         checkpoint): e.g. a penalty stiffness fixed at the first exchange, running maxima."""

@@ -19,7 +19,8 @@ monitor             writes
 ==================  ==============================================================================
 :class:`Watchdog`   nothing while the state is sound; ``checkpoints/last_good.npz`` and a
                     :class:`SimulationDiverged` naming the particle, quantity and step otherwise
-:class:`TimeSeries` ``timeseries.csv``: ``time, dt, step``, each system's observables, the probes
+:class:`TimeSeries` ``timeseries.csv``: ``time, dt, step``, each system's observables (and the
+                    interactions', e.g. a contact's stored energy), the probes
 :class:`Frames`     ``particles.pvd`` + ``particles_*.vtu`` (one series per system)
 :class:`Checkpoints` ``checkpoints/checkpoint_<step>.npz`` every ``checkpoint_every`` simulated
                     seconds or ``checkpoint_wall_every`` seconds of wall clock, and at the end
@@ -237,7 +238,7 @@ class Watchdog(Monitor):
 
 
 class TimeSeries(Monitor):
-    """``timeseries.csv``: ``time, dt, step``, each system's observables, then one column per
+    """``timeseries.csv``: ``time, dt, step``, each system's and interaction's observables, then one column per
     probe, every ``every`` simulated seconds (every step if ``None``) and at the end.
 
     The rows are kept in memory (:meth:`columns`) and the file, when there is an output

@@ -104,13 +104,15 @@ def _stop_on_signals():
 
 @dataclass
 class RunState:
-    """What monitors and probes see: the time, the step, the last step size and the state of
-    every system (``systems["fluid"]`` is the :class:`~mlsgalerkin.fluid.state.FluidState`)."""
+    """What monitors and probes see: the time, the step, the last step size, the state of every
+    system (``systems["fluid"]`` is the :class:`~mlsgalerkin.fluid.state.FluidState`) and the
+    scene's interactions."""
 
     t: float
     step: int
     dt: float
     systems: dict[str, Any]
+    interactions: tuple = ()
     _snapshot: Callable[[], tuple[dict, dict]] = field(repr=False, default=None)  # type: ignore[assignment]
 
     @property
@@ -119,8 +121,15 @@ class RunState:
         return self.systems.get("fluid")
 
     def observables(self) -> dict[str, dict[str, float]]:
-        """Each system's built-in time-series quantities, by system."""
-        return {k: s.observables() for k, s in self.systems.items() if hasattr(s, "observables")}
+        """Each system's built-in time-series quantities, by system, then the interactions'
+        (under ``"interactions"``)."""
+        out = {k: s.observables() for k, s in self.systems.items() if hasattr(s, "observables")}
+        merged: dict[str, float] = {}
+        for i in self.interactions:
+            merged.update(i.observables())
+        if merged:
+            out["interactions"] = merged
+        return out
 
     def health(self, limits: Any) -> dict | None:
         """The first system's diagnosis of an unsound state (``None`` if all are sound)."""
@@ -160,7 +169,7 @@ class Simulation:
             self.solvers.append(solver)
             self._solver_of.update({b.name: solver for b in bodies})
         self.state = RunState(t=0.0, step=0, dt=0.0, systems={s.key: s.state for s in self.solvers},
-                              _snapshot=self.snapshot)
+                              interactions=tuple(scene.interactions), _snapshot=self.snapshot)
         self.started = False
         self.identity = self._identity()
         self._monitors: list[Monitor] = []

@@ -173,6 +173,25 @@ def test_the_force_is_never_attractive(dim):
     np.testing.assert_allclose(approaching.slave_forces[0], approaching.pair_force[0] * up(dim), atol=1e-9)
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_stored_energy_is_the_potential_of_the_spring(dim):
+    """One slave ``δ`` inside the thickness of a rigid floor stores ``½ k δ²``, ``k = α m/Δt²``;
+    and the spring force is minus its derivative: ``(E(δ + ε) − E(δ − ε))/2ε = k δ`` at rest."""
+    def pressed(depth):
+        x = np.full(dim, 0.3)
+        x[-1] = G0 - depth
+        return forces(x, np.zeros(dim), 0.2, floor(dim))
+
+    k = penalty_stiffness(DEFAULT_ALPHA, 0.2, DT)
+    res = pressed(2e-4)
+    assert res.pair_stiffness.tolist() == pytest.approx([float(k)], rel=1e-14)
+    assert res.stored_energy == pytest.approx(0.5 * k * 2e-4 ** 2, rel=1e-9)
+    eps = 1e-7
+    slope = (pressed(2e-4 + eps).stored_energy - pressed(2e-4 - eps).stored_energy) / (2 * eps)
+    assert slope == pytest.approx(res.pair_force[0], rel=1e-6)
+    assert pressed(-1e-4).stored_energy == 0.0          # outside the thickness: no spring
+
+
 # ------------------------------------------------------------------ corners
 def test_inside_corner_of_a_2d_tank_holds_with_both_walls():
     tank = ContactSurface.tank((0.0, 0.0), (1.0, 1.0))
@@ -540,6 +559,8 @@ def assert_same_result(got, ref, dim: int, surf: ContactSurface) -> None:
         np.testing.assert_array_equal(got.pair_facet, ref.pair_facet)
     np.testing.assert_allclose(got.pair_gap, ref.pair_gap, rtol=0, atol=1e-12)
     np.testing.assert_allclose(got.pair_force, ref.pair_force, rtol=0, atol=1e-11 * scale)
+    np.testing.assert_allclose(got.pair_stiffness, ref.pair_stiffness, rtol=1e-13, atol=0)
+    assert got.stored_energy == pytest.approx(ref.stored_energy, rel=1e-10, abs=1e-300)
     np.testing.assert_allclose(got.pair_normal, ref.pair_normal, rtol=0, atol=1e-9)
     assert got.pair_weights.shape == ref.pair_weights.shape == (got.contacts, dim)
     for pairs in (got, ref):  # the slave forces are the sums of their contacts

@@ -95,6 +95,7 @@ class PenaltyContact(Interaction):
         self.max_penetration = 0.0
         self.max_active = 0
         self.last: dict[str, Any] = {}
+        self.energy = 0.0  # elastic energy of the contact springs at the last exchange (J, per m in 2D)
 
     @property
     def slave(self) -> str:
@@ -156,6 +157,7 @@ class PenaltyContact(Interaction):
             self.peak_force, self.time_of_peak_force = force, float(t)
         self.max_penetration = max(self.max_penetration, res.max_penetration)
         self.max_active = max(self.max_active, res.contacts)
+        self.energy = res.stored_energy
         moment = res.moment if d == 2 else np.asarray(res.moment).tolist()
         self.last = {"t": float(t), "force": res.total_force.tolist(), "moment": moment, "contacts": res.contacts,
                      "max_penetration": res.max_penetration}
@@ -169,8 +171,13 @@ class PenaltyContact(Interaction):
         return min(rigid_time_step(self.alpha, self.damping, self._dt_ref, kappa * self._dim), self._last_stable)
 
     # ------------------------------------------------------------------ restart and report
+    def observables(self) -> dict[str, float]:
+        """``<name>_energy``: the elastic energy of the active contact springs at the last
+        exchange, ``½ Σ k g²`` (J, per unit depth in 2D)."""
+        return {f"{self.name}_energy": self.energy}
+
     def state_dict(self) -> dict[str, Any]:
-        return {"dt_ref": self._dt_ref, "rigid": self._rigid, "dim": self._dim,
+        return {"dt_ref": self._dt_ref, "rigid": self._rigid, "dim": self._dim, "energy": self.energy,
                 "last_stable_dt": None if math.isinf(self._last_stable) else self._last_stable,
                 "exchanges": self.exchanges, "peak_force": self.peak_force, "time_of_peak_force": self.time_of_peak_force,
                 "max_penetration": self.max_penetration, "max_active": self.max_active, "last": self.last}
@@ -181,6 +188,7 @@ class PenaltyContact(Interaction):
         self.exchanges, self.peak_force = int(d["exchanges"]), float(d["peak_force"])
         self.time_of_peak_force, self.max_penetration = d["time_of_peak_force"], float(d["max_penetration"])
         self.max_active, self.last = int(d["max_active"]), dict(d["last"])
+        self.energy = float(d.get("energy", 0.0))   # checkpoints written before the column existed
 
     def summary(self) -> dict[str, Any]:
         return {

@@ -184,7 +184,8 @@ class PenaltyResult:
         they were taken: the primary first): the slave and the facet of each, with
         :attr:`pair_weights` ``(P, d)`` (facet coordinates ``N_a`` of the contact point),
         :attr:`pair_normal` ``(P, d)`` (the contact normal, toward the slave), :attr:`pair_gap`
-        ``(P,)`` (m) and :attr:`pair_force` ``(P,)`` (the normal force ``f_n ≥ 0``, N).
+        ``(P,)`` (m), :attr:`pair_force` ``(P,)`` (the normal force ``f_n ≥ 0``, N) and
+        :attr:`pair_stiffness` ``(P,)`` (``k = α m*/Δt_ref²``, N/m).
     """
 
     slave_forces: NDArray[np.float64]
@@ -202,6 +203,13 @@ class PenaltyResult:
     pair_normal: NDArray[np.float64]
     pair_gap: NDArray[np.float64]
     pair_force: NDArray[np.float64]
+    pair_stiffness: NDArray[np.float64]
+
+    @property
+    def stored_energy(self) -> float:
+        """Elastic energy of the active contact springs, ``½ Σ_p k_p g_p²`` (J, per unit depth in
+        2D): the potential of the penalty force ``−k g`` (its damping part dissipates)."""
+        return float(0.5 * np.sum(self.pair_stiffness * self.pair_gap ** 2))
 
     def contact_points(self, master_x: NDArray[np.float64], facets: NDArray[np.int64]
                        ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
@@ -368,7 +376,7 @@ def _contacts(xs, vs, ms, xm, vm, mm, rigid, facets, normals, indptr, indices, g
 
 @numba.njit(cache=True)
 def _gather(pf, pw, pn, pg, pk, pfn, xm, facets, centre, master_f, total, moment, slave_k, node_k,
-            out_slave, out_facet, out_w, out_n, out_g, out_f, rows):
+            out_slave, out_facet, out_w, out_n, out_g, out_f, out_k, rows):
     """Serial, in slave order: reactions on the master nodes, totals, stiffness row sums, and
     the active contacts as flat arrays (``rows[s]``: the slave's index among all slaves)."""
     n_s, maxc = pf.shape
@@ -391,6 +399,7 @@ def _gather(pf, pw, pn, pg, pk, pfn, xm, facets, centre, master_f, total, moment
             out_facet[p] = j
             out_g[p] = pg[s, c]
             out_f[p] = pfn[s, c]
+            out_k[p] = pk[s, c]
             for q in range(dim):
                 out_w[p, q] = pw[s, c, q]
                 out_n[p, q] = pn[s, c, q]
@@ -551,8 +560,9 @@ def penalty_forces(
     most = int(np.count_nonzero(pf >= 0))
     out_slave, out_facet = np.empty(most, dtype=np.int64), np.empty(most, dtype=np.int64)
     out_w, out_n, out_g, out_f = np.empty((most, d)), np.empty((most, d)), np.empty(most), np.empty(most)
+    out_k = np.empty(most)
     contacts, slaves, deepest = _gather(pf, pw, pn, pg, pk, pfn, xm, f, c, master_f, total, moment, slave_k, node_k,
-                                        out_slave, out_facet, out_w, out_n, out_g, out_f, rows)
+                                        out_slave, out_facet, out_w, out_n, out_g, out_f, out_k, rows)
     slave_f = np.zeros((n, d))
     slave_f[rows] = force_t
     gaps = np.full(n, np.inf)
@@ -561,7 +571,7 @@ def penalty_forces(
         slave_forces=slave_f, master_forces=master_f, gaps=gaps, contacts=int(contacts), active_slaves=int(slaves),
         max_penetration=float(deepest), total_force=total, moment=float(moment[0]) if d == 2 else moment,
         stable_dt=_stable_dt(slave_k, node_k, ms_t, mm, rigid, damping), pair_slave=out_slave, pair_facet=out_facet,
-        pair_weights=out_w, pair_normal=out_n, pair_gap=out_g, pair_force=out_f,
+        pair_weights=out_w, pair_normal=out_n, pair_gap=out_g, pair_force=out_f, pair_stiffness=out_k,
     )
 
 
@@ -580,7 +590,7 @@ def penalty_forces_reference(
     cos_feature = math.cos(math.radians(feature_angle))
     slave_f, master_f = np.zeros((n, d)), np.zeros_like(xm)
     gaps = np.full(n, np.inf)
-    pairs = []  # (slave, facet, weights, normal, gap, force)
+    pairs = []  # (slave, facet, weights, normal, gap, force, stiffness)
     total, moment = np.zeros(d), np.zeros(1 if d == 2 else 3)
     slave_k, node_k = np.zeros(n), np.zeros(xm.shape[0])
     c0 = np.zeros(d) if centre is None else np.asarray(centre, dtype=float)
@@ -628,7 +638,7 @@ def penalty_forces_reference(
             moment += np.cross(arm, -fn * nrm) if d == 3 else arm[0] * (-fn * nrm[1]) - arm[1] * (-fn * nrm[0])
             slave_k[s] += k
             np.add.at(node_k, f[j], w * k)
-            pairs.append((s, j, w, nrm, g, fn))
+            pairs.append((s, j, w, nrm, g, fn, k))
             contacts += 1
             deepest = max(deepest, -g)
     return PenaltyResult(
@@ -638,4 +648,5 @@ def penalty_forces_reference(
         pair_slave=np.array([q[0] for q in pairs], dtype=np.int64), pair_facet=np.array([q[1] for q in pairs], dtype=np.int64),
         pair_weights=np.array([q[2] for q in pairs]).reshape(-1, d), pair_normal=np.array([q[3] for q in pairs]).reshape(-1, d),
         pair_gap=np.array([q[4] for q in pairs], dtype=float), pair_force=np.array([q[5] for q in pairs], dtype=float),
+        pair_stiffness=np.array([q[6] for q in pairs], dtype=float),
     )

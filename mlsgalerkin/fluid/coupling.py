@@ -305,6 +305,10 @@ class StructureCoupling(Interaction):
     def stable_time_step(self) -> float:
         return self.contact.stable_time_step()
 
+    def observables(self) -> dict[str, float]:
+        """The contact's: ``<name>_contact_energy`` (J, per unit depth in 2D)."""
+        return self.contact.observables()
+
     # ------------------------------------------------------------------ restart and report
     def state_dict(self) -> dict[str, Any]:
         prev = None

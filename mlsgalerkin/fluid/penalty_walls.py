@@ -42,8 +42,9 @@ for bit. The effect's time-step limit is the constant
 its moment about ``moment_about`` (N·m/m in 2D; a vector in 3D; default the origin) are
 time-series columns ``wall_force_x_<body>``, ``wall_force_y_<body>`` (``_z_`` in 3D),
 ``wall_moment_<body>`` (2D) or ``wall_moment_x|y|z_<body>`` (3D), with ``penalty_contacts``
-(active contact pairs over all walls) and ``penalty_max_penetration_dx`` (the deepest
-``−g`` in particle spacings). ``summary.json`` keeps per wall the peak force and when it
+(active contact pairs over all walls), ``penalty_max_penetration_dx`` (the deepest
+``−g`` in particle spacings) and ``penalty_energy`` (the elastic energy of the active contact
+springs, ``½ Σ k g²``, J per unit depth in 2D: a part of the energy balance). ``summary.json`` keeps per wall the peak force and when it
 occurred, and the deepest penetration of the run.
 """
 
@@ -230,6 +231,7 @@ class PenaltyWalls(Effect):
                 state.sensors[col] = 0.0
         state.sensors["penalty_contacts"] = 0
         state.sensors["penalty_max_penetration_dx"] = 0.0
+        state.sensors["penalty_energy"] = 0.0
         self._reset_records()
         self.records = {name: {"peak_force": 0.0, "time_of_peak_force_s": None, "peak_force_vector": [0.0] * d,
                                "max_abs_moment": 0.0} for name in self._walls}
@@ -252,6 +254,7 @@ class PenaltyWalls(Effect):
         x, v, M = s.x[f], s.v[f], s.M[f]
         contacts = 0
         deepest = 0.0
+        energy = 0.0
         for name in self._walls:
             surf = s.wall_surfaces[name]
             res = penalty_forces(x, v, M, surf.x, surf.v, None, surf.facets, dt_ref=self._dt_ref,
@@ -272,7 +275,9 @@ class PenaltyWalls(Effect):
             rec["max_abs_moment"] = max(rec["max_abs_moment"], float(np.max(np.abs(moments))))
             contacts += res.contacts
             deepest = max(deepest, res.max_penetration)
+            energy += res.stored_energy
         s.sensors["penalty_contacts"] = int(contacts)
+        s.sensors["penalty_energy"] = energy
         s.sensors["penalty_max_penetration_dx"] = deepest / self._spacing
         self.max_contacts = max(self.max_contacts, contacts)
         if deepest > self.max_penetration:
