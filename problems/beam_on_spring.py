@@ -15,10 +15,16 @@ Reference (Sun 2016, MPS with 0.01 m particles): two major impacts on the beam, 
 corner on the beam up to about 6 kPa; after 6 s the beam oscillates near its natural frequency,
 with a period of about 0.2 s in water (longer than 0.1879 s dry: the water's added mass).
 Checked: ``angle`` (rad, counter-clockwise; the water pushes it negative) and ``pressure_P4``
-(Pa) over time — the impact windows (where the beam's turn exceeds a fifth of its largest, and
-where P4 exceeds 4 kPa), the largest angle and pressure, and the oscillation period after 6 s.
-``support="fixed"`` holds the beam still: the source's case 2, a rigid end wall, whose P4 shows
-when the returning water arrives without the beam's motion.
+(Pa) over time, the largest angle and pressure, the oscillation period after 6 s, and the
+impacts. An impact is the bulk of the water piling against the beam: a maximum of the water's
+horizontal centre of mass ``x_G(t) = x_G(0) + ∫ P_x/M dt`` (from the ``momentum_x`` and
+``total_mass`` columns), with the water's horizontal load on the beam averaged over
+``AVERAGE_OVER`` (about one period of the beam, which removes its free oscillation and the
+millisecond splash spikes): the load's peak nearest to each maximum, and its window, where the
+averaged load exceeds the load of the water at rest, ``ρ g h̄²/2`` with ``h̄ = 2H²/L``, by more
+than half the peak's excess. Threshold windows on the raw signals (``P4 > 4 kPa``, a turn above a
+fifth of the largest) are reported too; they also catch single splash spikes.
+``support="fixed"`` holds the beam still: the source's case 2, a rigid end wall.
 """
 
 from __future__ import annotations
@@ -49,6 +55,14 @@ PRESSURE_IMPACT = 4000.0
 #: Height of the pressure sensor above the bottom corner (m) and its face (m), as P4 of the
 #: fixed-wall case.
 SENSOR_HEIGHT, SENSOR_SIZE = 0.16, 0.0084
+#: Time over which the beam's load, angle and P4 are averaged to find the impacts (s): about one
+#: period of the beam in water (0.1879 s dry).
+AVERAGE_OVER = 0.2
+#: A maximum of the water's centre of mass counts as an impact when it has risen this far (m) since
+#: the lowest point after the previous one (the first swing is about 1.4 m, the return about 0.2 m).
+SLOSH_PROMINENCE = 0.05
+#: The source's impact windows (s), Sun (2016).
+SOURCE_IMPACTS = ((0.75, 2.0), (5.1, 5.9))
 #: How the beam stands: on its spring hinge (case 1 of the source) or fixed (case 2, a rigid wall).
 SUPPORTS = ("spring", "fixed")
 
@@ -149,13 +163,71 @@ def windows(t: np.ndarray, y: np.ndarray, level: float, gap: float = 0.3) -> lis
     return [(a, b) for a, b in out]
 
 
+def water_centre_x(t: np.ndarray, momentum_x: np.ndarray, mass: float, x0: float) -> np.ndarray:
+    """Horizontal centre of mass of the water (m), ``x_G(t) = x0 + ∫ P_x/M dt`` by the trapezoidal
+    rule over the time-series rows; ``t``, ``momentum_x`` (kg m/s per m) of shape ``(n,)``."""
+    v = np.asarray(momentum_x, dtype=float) / mass
+    return x0 + np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))])
+
+
+def averaged(t: np.ndarray, y: np.ndarray, span: float, step: float = 1.0e-3) -> tuple[np.ndarray, np.ndarray]:
+    """``y`` resampled on a uniform grid of ``step`` (s) and averaged over a centred window of
+    ``span`` (s); returns ``(grid, mean)``, both of shape ``(m,)``."""
+    grid = np.arange(float(t[0]), float(t[-1]) + 0.5 * step, step)
+    k = max(1, int(round(span / step)))
+    y_grid = np.interp(grid, t, y)
+    pad = np.pad(y_grid, (k // 2, k - 1 - k // 2), mode="edge")
+    return grid, np.convolve(pad, np.ones(k) / k, mode="valid")
+
+
+def impacts(t: np.ndarray, centre: np.ndarray, load: np.ndarray, rest_load: float) -> list[dict]:
+    """The impacts of the water on the beam: each maximum of the water's centre of mass ``centre``
+    (m), at least 0.5 s from a higher one, that has risen ``SLOSH_PROMINENCE`` above the lowest
+    point since the previous impact (or the start), with the peak of the
+    period-averaged ``load`` (N/m, grid of ``t``) nearest to it within 1 s, and that peak's window
+    where ``load − rest_load`` exceeds half the peak's excess. Keys: ``centre_max_s``,
+    ``centre_max_m``, ``load_peak_s``, ``load_peak_N_per_m``, ``window_s``."""
+    from scipy.signal import find_peaks
+
+    if t.size < 3:
+        return []
+    dt = float(t[1] - t[0])
+    ups, start = [], 0
+    for i in find_peaks(centre, distance=max(1, int(0.5 / dt)))[0]:
+        if centre[i] - centre[start:i + 1].min() >= SLOSH_PROMINENCE:   # risen far enough since the last
+            ups.append(i)
+            start = i
+    peaks, _ = find_peaks(load, distance=max(1, int(0.2 / dt)))
+    out = []
+    for i in ups:
+        near = peaks[np.abs(t[peaks] - t[i]) <= 1.0]
+        item = {"centre_max_s": float(t[i]), "centre_max_m": float(centre[i])}
+        if near.size:
+            j = int(near[np.argmax(load[near])])
+            half = rest_load + 0.5 * (load[j] - rest_load)
+            a, b = j, j
+            while a > 0 and load[a - 1] > half:
+                a -= 1
+            while b < load.size - 1 and load[b + 1] > half:
+                b += 1
+            item.update(load_peak_s=float(t[j]), load_peak_N_per_m=float(load[j]),
+                        window_s=[round(float(t[a]), 3), round(float(t[b]), 3)])
+        out.append(item)
+    return out
+
+
+def outside(time: float, window: tuple[float, float]) -> float:
+    """How far ``time`` lies outside ``window`` (s): 0 inside, negative before, positive after."""
+    return min(0.0, time - window[0]) + max(0.0, time - window[1])
+
+
 def analyse(result, p: Parameters) -> dict:
     ts = result.timeseries
     t = np.asarray(ts["time"])
     theta = np.asarray(ts["angle"])
     p4 = np.asarray(ts["pressure_P4"])
     beam = _beam(p)
-    out: dict = {"support": p.support, "dry_period_s": beam.natural_period() if p.support == "spring" else None,
+    out: dict = {"support": p.support, "alpha": p.alpha, "delta": p.delta, "dry_period_s": beam.natural_period() if p.support == "spring" else None,
                  "angle_min_rad": float(theta.min()),
                  "angle_max_rad": float(theta.max()), "pressure_P4_max_Pa": float(p4.max()),
                  "time_of_pressure_P4_max_s": float(t[int(np.argmax(p4))])}
@@ -174,8 +246,36 @@ def analyse(result, p: Parameters) -> dict:
         out["late_period_s"] = float(np.diff(tc).mean()) if tc.size >= 2 else None
         out["late_periods_measured"] = int(max(tc.size - 1, 0))
     out.update(numerical_dissipation(result, 2.0 * math.sqrt(p.g * p.height), p.height))
-    out["headline"] = (f"turn windows {out['impact_windows_s']} s, P4 > 4 kPa {out['pressure_P4_windows_s']} s "
-                       f"(source: impacts 0.75-2 and 5.1-5.9 s); largest turn "
+    centre = water_centre_x(t, np.asarray(ts["momentum_x"]), float(np.asarray(ts["total_mass"])[0]), p.height)
+    grid, load = averaged(t, np.asarray(ts["beam_force_x"]), AVERAGE_OVER)
+    _, lean = averaged(t, theta, AVERAGE_OVER)
+    _, p4_mean = averaged(t, p4, AVERAGE_OVER)
+    rest_load = 0.5 * p.rho * p.g * (2.0 * p.height ** 2 / p.tank_length) ** 2
+    found = impacts(grid, np.interp(grid, t, centre), load, rest_load)
+    for item in found:
+        if "window_s" in item:
+            a, b = np.searchsorted(grid, item["window_s"])
+            item["lean_rad"] = float(lean[a:b + 1].min())
+            item["P4_averaged_max_Pa"] = float(p4_mean[a:b + 1].max())
+    out["impacts"] = found
+    out["rest_load_N_per_m"] = rest_load
+    out["impact_times"] = "; ".join(f"{i['centre_max_s']:.2f} s" for i in found)
+    out["load_peaks"] = "; ".join(f"{i['load_peak_s']:.2f} s: {i['load_peak_N_per_m']:.0f} N/m" for i in found
+                                  if "load_peak_s" in i)
+    out["load_windows"] = "; ".join(f"{i['window_s'][0]:.2f}-{i['window_s'][1]:.2f} s" for i in found
+                                    if "window_s" in i)
+    if p.support == "spring":
+        out["impact_leans_deg"] = "; ".join(f"{math.degrees(i['lean_rad']):.1f}" for i in found if "lean_rad" in i)
+    out["impact_P4_averaged_Pa"] = "; ".join(f"{i['P4_averaged_max_Pa']:.0f}" for i in found
+                                             if "P4_averaged_max_Pa" in i)
+    for k, window in enumerate(SOURCE_IMPACTS, start=1):
+        if len(found) >= k:
+            out[f"impact{k}_centre_offset_s"] = outside(found[k - 1]["centre_max_s"], window)
+            if "load_peak_s" in found[k - 1]:
+                out[f"impact{k}_load_peak_offset_s"] = outside(found[k - 1]["load_peak_s"], window)
+    out["headline"] = (f"impacts (water piled on the beam) at {out['impact_times'] or 'none'}, load peaks "
+                       f"{out['load_peaks'] or 'none'} (source: 0.75-2 and 5.1-5.9 s); threshold windows: turn "
+                       f"{out['impact_windows_s']} s, P4 > 4 kPa {out['pressure_P4_windows_s']} s; largest turn "
                        f"{math.degrees(max(out['angle_min_rad'], out['angle_max_rad'], key=abs)):.2f}°; P4 max "
                        f"{out['pressure_P4_max_Pa']:.0f} Pa")
     if p.support == "spring":

@@ -120,6 +120,9 @@ def reanalysed(problem: str, label: str, overrides: dict, runs: Path) -> dict:
 
     safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in f"{problem}_{label}")
     run_dir = runs / safe
+    if not (run_dir / "summary.json").is_file():      # not run yet (or still running): an empty row
+        return {"problem": problem, "case": label, "overrides": json.dumps(overrides, sort_keys=True),
+                "status": "not run", "headline": f"no run in {run_dir}"}
     summary = json.loads((run_dir / "summary.json").read_text())
     module = load_problem(problem)
     params = module.Parameters(**{k: v for k, v in summary["parameters"].items()

@@ -8,9 +8,11 @@ resolutions, against their references, with error *and* wall time.
 
 Sections: ``plate`` (hydrostatic_plate, mid-span deflection against plate theory, dx 0.05 and
 0.025), ``gate`` (elastic_gate against Antoci et al. 2007, dx 2 and 1 mm, and the elastic
-constants 7.8 / 10 / 12 MPa at 2 mm), ``wedge`` (wedge_drop against Zhao et al. 1996, dx 10 and
-5 mm), ``clamped`` (beam_clamped, tip period, dx 4 and 2.5 mm), ``spring`` (beam_on_spring, impact
-windows and period, dx 30 and 15 mm). Each section writes ``<section>.csv``, ``<section>.md``
+constants 7.8 / 10 / 12 MPa at 2 mm, and the scan that identifies 5 MPa), ``wedge`` (wedge_drop
+against Zhao et al. 1996, dx 10, 5 and 2.5 mm), ``clamped`` (beam_clamped, tip period, dx 4, 2.5
+and 2 mm), ``spring`` (beam_on_spring: the impacts and the period, dx 30, 15 and 7.5 mm on the
+spring and held fixed, and a dissipation study at 30 and 15 mm; also ``spring_depth.png``, the
+water's depth along the tank over time). Each section writes ``<section>.csv``, ``<section>.md``
 (with the command, version, commit and date) and a comparison plot into ``--out``; particle
 output goes to ``--runs`` (default ``results/structure_runs``, not committed).
 """
@@ -19,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -37,6 +40,10 @@ REPORT = "structure"
 COMMON = ["case", "status", "fluid_particles", "steps", "t_reached_s", "max_penetration_dx",
           "numerical_viscosity_m2_per_s", "numerical_reynolds_number", "wall_time_s", "wall_s_per_simulated_s",
           "run_commit"]
+
+
+#: Artificial viscosity of the spring section's dissipation study (the default is 0.02).
+DISSIPATION_ALPHAS = (0.005, 0.05, 0.1, 0.2)
 
 
 def cases(section: str, quick: bool) -> tuple[str, list[tuple[str, dict]]]:
@@ -63,9 +70,15 @@ def cases(section: str, quick: bool) -> tuple[str, list[tuple[str, dict]]]:
                                                                          "wall_acceleration": 1.0})])
     return "beam_on_spring", ([("dx=60mm", {"dx": 0.06, "t_end": 0.3})] if quick else
                               [("dx=30mm", {"dx": 0.03}), ("dx=15mm", {"dx": 0.015}),
+                               ("dx=7.5mm", {"dx": 0.0075, "t_end": 6.5}),
                                ("dx=30mm fixed", {"dx": 0.03, "support": "fixed"}),
                                ("dx=15mm fixed", {"dx": 0.015, "support": "fixed"}),
-                               ("dx=7.5mm fixed", {"dx": 0.0075, "support": "fixed", "t_end": 6.0})])
+                               ("dx=7.5mm fixed", {"dx": 0.0075, "support": "fixed", "t_end": 6.0})]
+                              + [(f"dx=30mm fixed alpha={a:g}", {"dx": 0.03, "support": "fixed", "alpha": a})
+                                 for a in DISSIPATION_ALPHAS]
+                              + [("dx=30mm fixed delta=0.5", {"dx": 0.03, "support": "fixed", "delta": 0.5})]
+                              + [(f"dx=15mm fixed alpha={a:g}", {"dx": 0.015, "support": "fixed", "alpha": a})
+                                 for a in (0.05, 0.1)])
 
 
 COLUMNS = {
@@ -79,7 +92,9 @@ COLUMNS = {
               "reference_force_peak_time_s", "force_peak_error", "force_peak_time_error_s", "force_rms_error_N"],
     "clamped": ["period_s", "crossing_period_s", "periods_measured", "source_period_s", "dry_period_2d_model_s", "period_error_vs_source",
                 "period_error_vs_dry_model", "tip_x_max_m", "tip_x_min_m", "first_load_s"],
-    "spring": ["support", "turn_windows", "P4_windows", "angle_min_rad", "angle_max_rad", "pressure_P4_max_Pa", "time_of_pressure_P4_max_s", "late_period_s",
+    "spring": ["support", "alpha", "delta", "impact_times", "load_peaks", "load_windows", "impact_leans_deg",
+               "impact_P4_averaged_Pa", "impact1_centre_offset_s", "impact1_load_peak_offset_s", "impact2_centre_offset_s",
+               "impact2_load_peak_offset_s", "turn_windows", "P4_windows", "angle_min_rad", "angle_max_rad", "pressure_P4_max_Pa", "time_of_pressure_P4_max_s", "late_period_s",
                "late_periods_measured", "dry_period_s"],
 }
 
@@ -104,10 +119,18 @@ NOTES = {
              "velocity; velocity_from_measured_force_error is the data's own disagreement.",
     "clamped": "Source (Sun 2016): the tip oscillates with a period of about 0.6 s, close to the first dry period "
                "0.5971 s. The period here is measured between upward crossings of the mean after the first impact.",
-    "spring": "Source (Sun 2016): two impacts, at about 0.75-2 s and 5.1-5.9 s, each turning the beam through large "
-              "angles; P4 up to about 6 kPa; period about 0.2 s in water after 6 s (0.1879 s dry). The runs with "
-              "the beam held fixed (the source's case 2, a rigid end wall) show when the returning water arrives "
-              "without the beam's motion.",
+    "spring": "Source (Sun 2016, MPS with 0.01 m particles; no experiment): two major impacts, at about 0.75-2 s and "
+              "5.1-5.9 s, each turning the beam through large angles; P4 up to about 6 kPa; period about 0.2 s in "
+              "water after 6 s (0.1879 s dry). Goal: each impact inside the source's window (offset 0 s; negative: "
+              "before it). An impact is the bulk of the water piled against the beam: a maximum of the water's "
+              "horizontal centre of mass (impact_times; from the momentum_x column), with the peak of the water's "
+              "horizontal load on the beam averaged over 0.2 s, about one period of the beam (load_peaks), and that "
+              "peak's window where the averaged load exceeds the load of the water at rest (245 N/m) by more than "
+              "half the peak's excess (load_windows); impact_leans_deg and impact_P4_averaged_Pa are the largest "
+              "0.2 s mean lean and P4 in each window. turn_windows (turn above a fifth of the largest) and P4_windows "
+              "(P4 > 4 kPa) are threshold windows on the raw signals: they also catch single splash spikes of a few "
+              "milliseconds. The runs with the beam held fixed are the source's case 2, a rigid end wall; the "
+              "alpha and delta cases are the dissipation study (default alpha 0.02, delta 0.1).",
 }
 
 
@@ -147,17 +170,8 @@ def plot(section: str, out: Path, rows: list[dict]) -> None:
             ax.set_xlabel("t (ms)")
         axes[0].legend(fontsize=7)
     elif section == "spring":
-        fig, axes = plt.subplots(2, 1, figsize=(9, 5.4), sharex=True)
-        for label, ts in series:
-            axes[0].plot(ts["time"], np.degrees(np.asarray(ts["angle"])), lw=1.0, label=label)
-            axes[1].plot(ts["time"], 1e-3 * np.asarray(ts["pressure_P4"]), lw=0.8, label=label)
-        for ax in axes:
-            for a, b in ((0.75, 2.0), (5.1, 5.9)):
-                ax.axvspan(a, b, color="0.9", zorder=0)
-        axes[0].set_ylabel("angle (deg)")
-        axes[1].set_ylabel("pressure_P4 (kPa)")
-        axes[1].set_xlabel("t (s)  (shaded: the source's impact windows)")
-        axes[0].legend(fontsize=7)
+        spring_plots(out, series)
+        return
     else:
         column, unit, scale = {"plate": ("midspan_deflection", "mm", 1e3), "clamped": ("tip_x", "mm", 1e3)}[section]
         fig, ax = plt.subplots(figsize=(8, 3.6))
@@ -178,6 +192,134 @@ def plot(section: str, out: Path, rows: list[dict]) -> None:
     fig.savefig(buf, format="png", dpi=90)
     plt.close(fig)
     atomic_write(out / f"{section}.png", buf.getvalue())
+
+
+def spring_plots(out: Path, series: list[tuple[str, dict]]) -> None:
+    """``spring.png``: the beam's angle, P4, the water's centre of mass and the beam's load
+    (P4 and the load averaged over ``AVERAGE_OVER``) of the resolution cases, the source's impact
+    windows shaded; ``spring_dissipation.png``: the same for the dissipation study (30 and 15 mm,
+    the beam held fixed), with the water's kinetic energy in place of the angle."""
+    import io
+
+    import matplotlib.pyplot as plt
+
+    spring = load_problem("beam_on_spring")
+    p0 = spring.Parameters()
+
+    def curves(ts):
+        t = np.asarray(ts["time"])
+        centre = spring.water_centre_x(t, np.asarray(ts["momentum_x"]), float(np.asarray(ts["total_mass"])[0]),
+                                       p0.height)
+        grid, load = spring.averaged(t, np.asarray(ts["beam_force_x"]), spring.AVERAGE_OVER)
+        _, p4 = spring.averaged(t, np.asarray(ts["pressure_P4"]), spring.AVERAGE_OVER)
+        return t, centre, grid, load, p4
+
+    def shade(axes):
+        for ax in np.ravel(axes):
+            for a, b in spring.SOURCE_IMPACTS:
+                ax.axvspan(a, b, color="0.9", zorder=0)
+
+    study = [(label, ts) for label, ts in series if "alpha=" in label or "delta=" in label]
+    main = [(label, ts) for label, ts in series if (label, ts) not in study]
+    for name, group in (("spring", main), ("spring_dissipation", study)):
+        if not group:
+            continue
+        fig, axes = plt.subplots(2, 2, figsize=(11, 6), sharex=True)
+        for label, ts in group:
+            t, centre, grid, load, p4 = curves(ts)
+            if group is study:     # all held fixed: the water's kinetic energy shows the dissipation
+                axes[0, 0].plot(t, np.asarray(ts["kinetic_energy"]), lw=0.8, label=label)
+            else:
+                axes[0, 0].plot(t, np.degrees(np.asarray(ts["angle"])), lw=0.8, label=label)
+            axes[0, 1].plot(grid, 1e-3 * p4, lw=1.0, label=label)
+            axes[1, 0].plot(t, centre, lw=1.0, label=label)
+            axes[1, 1].plot(grid, load, lw=1.0, label=label)
+        rest = 0.5 * p0.rho * p0.g * (2.0 * p0.height ** 2 / p0.tank_length) ** 2
+        axes[1, 1].axhline(rest, color="k", ls=":", lw=0.8, label="water at rest")
+        axes[1, 0].axhline(0.5 * p0.tank_length, color="k", ls=":", lw=0.8, label="water at rest")
+        shade(axes)
+        axes[0, 0].set_ylabel("water kinetic energy (J/m)" if group is study else "angle (deg)")
+        axes[0, 1].set_ylabel(f"pressure_P4, {spring.AVERAGE_OVER:g} s mean (kPa)")
+        axes[1, 0].set_ylabel("water centre of mass x (m)")
+        axes[1, 1].set_ylabel(f"load on the beam, {spring.AVERAGE_OVER:g} s mean (N/m)")
+        for ax in axes[1]:
+            ax.set_xlabel("t (s)  (shaded: Sun 2016's impact windows)")
+        axes[1, 0].legend(fontsize=7)
+        fig.suptitle("beam_on_spring" + (": artificial viscosity and density diffusion" if group is study else ""),
+                     fontsize=10)
+        fig.tight_layout()
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=90)
+        plt.close(fig)
+        atomic_write(out / f"{name}.png", buf.getvalue())
+
+
+def tank_depths(run_dir: Path, length: float, bins: int = 46) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The water's depth along the tank at each particle frame of ``run_dir``: the area of the
+    fluid particles (dx² each) in each of ``bins`` columns over ``[0, length]``, divided by the
+    column's width (m; spray counts where it flies). Returns ``(t (n,), x centres (bins,),
+    depth (n, bins))``."""
+    import xml.etree.ElementTree as ET
+
+    import meshio
+
+    dx = json.loads((run_dir / "summary.json").read_text())["parameters"]["dx"]
+    edges = np.linspace(0.0, length, bins + 1)
+    times, depth = [], []
+    for ds in ET.parse(run_dir / "particles.pvd").getroot().iter("DataSet"):
+        m = meshio.read(run_dir / ds.get("file"))
+        fluid = np.asarray(m.point_data["is_wall"]).ravel() == 0
+        counts, _ = np.histogram(m.points[fluid, 0], edges)
+        times.append(float(ds.get("timestep")))
+        depth.append(counts * dx * dx / np.diff(edges))
+    return np.asarray(times), 0.5 * (edges[1:] + edges[:-1]), np.asarray(depth)
+
+
+def spring_depth_plot(out: Path, rows: list[dict]) -> None:
+    """``spring_depth.png``: where the water is along the tank over time (depth from the particle
+    frames) for the finest run on the spring and held fixed, the source's impact windows marked on
+    the beam's side, and a long wave on the mean depth, ``sqrt(g h̄)``, leaving the left wall when
+    the water there stands highest."""
+    import io
+
+    import matplotlib.pyplot as plt
+
+    spring = load_problem("beam_on_spring")
+    p0 = spring.Parameters()
+    finest = {}
+    for r in rows:
+        run_dir = Path(r.get("run_dir") or "")
+        if "alpha=" in r["case"] or "delta=" in r["case"] or not (run_dir / "particles.pvd").is_file():
+            continue
+        dx = json.loads((run_dir / "summary.json").read_text())["parameters"]["dx"]
+        key = r.get("support", "spring")
+        if key not in finest or dx < finest[key][0]:
+            finest[key] = (dx, r["case"], run_dir)
+    if not finest:
+        return
+    fig, axes = plt.subplots(1, len(finest), figsize=(5.5 * len(finest), 5.2), squeeze=False, sharey=True)
+    mean_depth = 2.0 * p0.height ** 2 / p0.tank_length
+    c = math.sqrt(p0.g * mean_depth)
+    for ax, (support, (dx, label, run_dir)) in zip(axes[0], sorted(finest.items(), reverse=True)):
+        t, x, h = tank_depths(run_dir, p0.tank_length)
+        im = ax.pcolormesh(x, t, h, shading="nearest", cmap="Blues", vmin=0.0, vmax=0.5)
+        for a, b in spring.SOURCE_IMPACTS:
+            ax.plot([p0.tank_length] * 2, [a, b], color="C3", lw=6, solid_capstyle="butt")
+        later = t > 2.0
+        t_left = float(t[later][np.argmax(h[later, 0])]) if later.any() else 0.0   # the run-up on the left wall
+        ax.plot([0.0, p0.tank_length], [t_left, t_left + p0.tank_length / c], "k--", lw=0.8,
+                label=f"long wave sqrt(g h̄) = {c:.2f} m/s")
+        ax.set_xlabel("x (m)")
+        ax.set_title(f"{label}", fontsize=9)
+        ax.legend(fontsize=7, loc="upper left")
+    axes[0, 0].set_ylabel("t (s)")
+    fig.colorbar(im, ax=axes[0].tolist(), label="water depth (m)")
+    fig.suptitle("beam_on_spring: the water's depth along the tank (red at the beam: Sun 2016's impact windows)",
+                 fontsize=10)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=90)
+    plt.close(fig)
+    atomic_write(out / "spring_depth.png", buf.getvalue())
 
 
 def water_levels(run_dir: Path, n_middle: tuple[float, float] = (0.025, 0.075)) -> dict[float, float]:
@@ -260,6 +402,8 @@ def main(argv: list[str] | None = None) -> int:
         plot(section, out, rows)
         if section == "gate" and not args.quick:
             gate_quasi_static(out, rows)
+        if section == "spring" and not args.quick:
+            spring_depth_plot(out, rows)
     index = ["# Structures loaded by the fluid: validation", "", "Sections (each table states its goal and how it "
              "was produced):", ""]
     index += [f"- [{p.stem}]({p.name})" for p in sorted(out.glob("*.md")) if p.name != "summary.md"]
