@@ -171,6 +171,7 @@ class Simulation:
         self.state = RunState(t=0.0, step=0, dt=0.0, systems={s.key: s.state for s in self.solvers},
                               interactions=tuple(scene.interactions), _snapshot=self.snapshot)
         self.started = False
+        self._code_commit: str | None = None
         self.identity = self._identity()
         self._monitors: list[Monitor] = []
         self._changes: list[dict] = []
@@ -215,6 +216,7 @@ class Simulation:
         """First force evaluation of every solver at the initial time, then every interaction's
         :meth:`~mlsgalerkin.dynamics.Interaction.after_step` (forces the solvers' first
         evaluation produced, for the other body's first step)."""
+        self._note_code_commit()
         for s in self.solvers:
             s.start()
         for i in self.scene.interactions:
@@ -317,7 +319,18 @@ class Simulation:
         st = self.state
         st.t, st.step, st.dt = float(meta["t"]), int(meta["step"]), float(meta["dt"])
         self._changes = list(meta.get("changes", []))
+        self._note_code_commit()
         self.started = True
+
+    def _note_code_commit(self) -> None:
+        """The commit of the code that steps from here (``summary.json``'s ``git_commit``: a run
+        reports the code it ran, not the code current when its summary is written)."""
+        from mlsgalerkin.io import git_commit
+
+        try:
+            self._code_commit = git_commit()
+        except Exception:  # best effort, as the rest of the provenance
+            self._code_commit = None
 
     # ------------------------------------------------------------------ run
     def monitors(self, out: Path | None, progress: bool) -> list[Monitor]:
@@ -503,7 +516,8 @@ class Simulation:
 
         summary = dict(summary)
         try:
-            summary["provenance"] = provenance(f"run {self.scene.name}")
+            summary["provenance"] = provenance(f"run {self.scene.name}", extra={"git_commit": self._code_commit}
+                                               if self._code_commit else None)
         except Exception:  # provenance is best effort (no git in an installed package)
             pass
         write_json(out / "summary.json", summary)

@@ -250,3 +250,23 @@ def test_checkpoint_of_several_solvers_restarts_bit_for_bit(tmp_path):
         a, b = straight.state.systems[key], resumed.state.systems[key]
         assert np.array_equal(a.x, b.x) and np.array_equal(a.v, b.v), key
     assert (tmp_path / "point_masses.pvd").is_file()  # each system writes its own frame series
+
+
+def test_summary_names_the_commit_of_the_code_that_ran(tmp_path, monkeypatch):
+    """``summary.json``'s ``git_commit`` is the commit when the run started, not a later one
+    checked out (or committed) while it ran and current when the summary is written."""
+    import importlib
+    import json
+
+    import mlsgalerkin.io
+    from mlsgalerkin.problem import load_problem
+
+    provenance_module = importlib.import_module("mlsgalerkin.io.provenance")
+
+    mod = load_problem("dam_break")
+    scene = mod.make_scene(mod.Parameters(dx=0.02, t_end=0.002))
+    monkeypatch.setattr(mlsgalerkin.io, "git_commit", lambda *a, **k: "c0ffee1")
+    monkeypatch.setattr(provenance_module, "git_commit", lambda *a, **k: "later99")
+    Simulation(scene).run(tmp_path / "run", progress=False)
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["provenance"]["git_commit"] == "c0ffee1"
