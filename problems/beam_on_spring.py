@@ -216,6 +216,25 @@ def impacts(t: np.ndarray, centre: np.ndarray, load: np.ndarray, rest_load: floa
     return out
 
 
+def load_at_rest(p: Parameters) -> float:
+    """Horizontal load of the water at rest on the beam, ``ρ g h̄²/2`` with the mean depth
+    ``h̄ = 2H²/L`` (N/m)."""
+    return 0.5 * p.rho * p.g * (2.0 * p.height ** 2 / p.tank_length) ** 2
+
+
+def impact_signals(ts: dict, p: Parameters) -> dict[str, np.ndarray]:
+    """The signals the impacts are read from, for a run's time series ``ts``: ``t`` and the
+    water's centre of mass ``centre`` (m) on the rows; on the uniform ``grid`` (1 ms) the load on
+    the beam ``load`` (N/m), its angle ``lean`` (rad) and ``p4`` (Pa), each averaged over
+    ``AVERAGE_OVER``."""
+    t = np.asarray(ts["time"])
+    centre = water_centre_x(t, np.asarray(ts["momentum_x"]), float(np.asarray(ts["total_mass"])[0]), p.height)
+    grid, load = averaged(t, np.asarray(ts["beam_force_x"]), AVERAGE_OVER)
+    _, lean = averaged(t, np.asarray(ts["angle"]), AVERAGE_OVER)
+    _, p4 = averaged(t, np.asarray(ts["pressure_P4"]), AVERAGE_OVER)
+    return {"t": t, "centre": centre, "grid": grid, "load": load, "lean": lean, "p4": p4}
+
+
 def outside(time: float, window: tuple[float, float]) -> float:
     """How far ``time`` lies outside ``window`` (s): 0 inside, negative before, positive after."""
     return min(0.0, time - window[0]) + max(0.0, time - window[1])
@@ -246,12 +265,10 @@ def analyse(result, p: Parameters) -> dict:
         out["late_period_s"] = float(np.diff(tc).mean()) if tc.size >= 2 else None
         out["late_periods_measured"] = int(max(tc.size - 1, 0))
     out.update(numerical_dissipation(result, 2.0 * math.sqrt(p.g * p.height), p.height))
-    centre = water_centre_x(t, np.asarray(ts["momentum_x"]), float(np.asarray(ts["total_mass"])[0]), p.height)
-    grid, load = averaged(t, np.asarray(ts["beam_force_x"]), AVERAGE_OVER)
-    _, lean = averaged(t, theta, AVERAGE_OVER)
-    _, p4_mean = averaged(t, p4, AVERAGE_OVER)
-    rest_load = 0.5 * p.rho * p.g * (2.0 * p.height ** 2 / p.tank_length) ** 2
-    found = impacts(grid, np.interp(grid, t, centre), load, rest_load)
+    sig = impact_signals(ts, p)
+    grid, load, lean, p4_mean = sig["grid"], sig["load"], sig["lean"], sig["p4"]
+    rest_load = load_at_rest(p)
+    found = impacts(grid, np.interp(grid, t, sig["centre"]), load, rest_load)
     for item in found:
         if "window_s" in item:
             a, b = np.searchsorted(grid, item["window_s"])

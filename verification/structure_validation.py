@@ -194,6 +194,11 @@ def plot(section: str, out: Path, rows: list[dict]) -> None:
     atomic_write(out / f"{section}.png", buf.getvalue())
 
 
+def _dissipation_case(label: str) -> bool:
+    """Whether a spring case belongs to the dissipation study (its label sets alpha or delta)."""
+    return "alpha=" in label or "delta=" in label
+
+
 def spring_plots(out: Path, series: list[tuple[str, dict]]) -> None:
     """``spring.png``: the beam's angle, P4, the water's centre of mass and the beam's load
     (P4 and the load averaged over ``AVERAGE_OVER``) of the resolution cases, the source's impact
@@ -204,38 +209,29 @@ def spring_plots(out: Path, series: list[tuple[str, dict]]) -> None:
     import matplotlib.pyplot as plt
 
     spring = load_problem("beam_on_spring")
-    p0 = spring.Parameters()
-
-    def curves(ts):
-        t = np.asarray(ts["time"])
-        centre = spring.water_centre_x(t, np.asarray(ts["momentum_x"]), float(np.asarray(ts["total_mass"])[0]),
-                                       p0.height)
-        grid, load = spring.averaged(t, np.asarray(ts["beam_force_x"]), spring.AVERAGE_OVER)
-        _, p4 = spring.averaged(t, np.asarray(ts["pressure_P4"]), spring.AVERAGE_OVER)
-        return t, centre, grid, load, p4
+    p0 = spring.Parameters()    # the runs differ in dx, support, alpha and delta only
 
     def shade(axes):
         for ax in np.ravel(axes):
             for a, b in spring.SOURCE_IMPACTS:
                 ax.axvspan(a, b, color="0.9", zorder=0)
 
-    study = [(label, ts) for label, ts in series if "alpha=" in label or "delta=" in label]
-    main = [(label, ts) for label, ts in series if (label, ts) not in study]
+    study = [(label, ts) for label, ts in series if _dissipation_case(label)]
+    main = [(label, ts) for label, ts in series if not _dissipation_case(label)]
     for name, group in (("spring", main), ("spring_dissipation", study)):
         if not group:
             continue
         fig, axes = plt.subplots(2, 2, figsize=(11, 6), sharex=True)
         for label, ts in group:
-            t, centre, grid, load, p4 = curves(ts)
+            sig = spring.impact_signals(ts, p0)
             if group is study:     # all held fixed: the water's kinetic energy shows the dissipation
-                axes[0, 0].plot(t, np.asarray(ts["kinetic_energy"]), lw=0.8, label=label)
+                axes[0, 0].plot(sig["t"], np.asarray(ts["kinetic_energy"]), lw=0.8, label=label)
             else:
-                axes[0, 0].plot(t, np.degrees(np.asarray(ts["angle"])), lw=0.8, label=label)
-            axes[0, 1].plot(grid, 1e-3 * p4, lw=1.0, label=label)
-            axes[1, 0].plot(t, centre, lw=1.0, label=label)
-            axes[1, 1].plot(grid, load, lw=1.0, label=label)
-        rest = 0.5 * p0.rho * p0.g * (2.0 * p0.height ** 2 / p0.tank_length) ** 2
-        axes[1, 1].axhline(rest, color="k", ls=":", lw=0.8, label="water at rest")
+                axes[0, 0].plot(sig["t"], np.degrees(np.asarray(ts["angle"])), lw=0.8, label=label)
+            axes[0, 1].plot(sig["grid"], 1e-3 * sig["p4"], lw=1.0, label=label)
+            axes[1, 0].plot(sig["t"], sig["centre"], lw=1.0, label=label)
+            axes[1, 1].plot(sig["grid"], sig["load"], lw=1.0, label=label)
+        axes[1, 1].axhline(spring.load_at_rest(p0), color="k", ls=":", lw=0.8, label="water at rest")
         axes[1, 0].axhline(0.5 * p0.tank_length, color="k", ls=":", lw=0.8, label="water at rest")
         shade(axes)
         axes[0, 0].set_ylabel("water kinetic energy (J/m)" if group is study else "angle (deg)")
@@ -289,7 +285,7 @@ def spring_depth_plot(out: Path, rows: list[dict]) -> None:
     finest = {}
     for r in rows:
         run_dir = Path(r.get("run_dir") or "")
-        if "alpha=" in r["case"] or "delta=" in r["case"] or not (run_dir / "particles.pvd").is_file():
+        if _dissipation_case(r["case"]) or not (run_dir / "particles.pvd").is_file():
             continue
         dx = json.loads((run_dir / "summary.json").read_text())["parameters"]["dx"]
         key = r.get("support", "spring")
