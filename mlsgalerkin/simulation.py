@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from mlsgalerkin.dynamics import Solver
 from mlsgalerkin.monitors import (
@@ -371,7 +372,18 @@ class Simulation:
         SIGINT (Ctrl-C) and SIGTERM stop the run after the step in progress: the files and a
         checkpoint are written, and :class:`RunInterrupted` is raised; ``restart="latest"``
         continues to the same end state and time series as a run that never stopped.
+
+        BLAS libraries run on one thread for the whole run (restored afterwards): numba's threads
+        own the cores, and OpenBLAS worker threads that busy-wait after a call on a large array
+        would fight them (above about 10⁴ particles a 2-thread run was slower than a 1-thread one).
         """
+        with threadpool_limits(limits=1, user_api="blas"):
+            return self._run(out, progress=progress, restart=restart, max_steps=max_steps, analyse=analyse,
+                             overwrite=overwrite, allow_changes=allow_changes, origin=origin)
+
+    def _run(self, out: str | Path | None, *, progress: bool, restart: str | Path | None, max_steps: int | None,
+             analyse: Callable[[RunResult], dict] | None, overwrite: bool, allow_changes: bool,
+             origin: dict | None) -> RunResult:
         out = Path(out) if out is not None else None
         if out is not None:
             if out.exists() and not out.is_dir():
