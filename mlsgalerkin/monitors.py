@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.simulation import RunState
+    from mlsgalerkin.run_state import RunState
 
 __all__ = [
     "Checkpoints",
@@ -221,7 +221,7 @@ class Watchdog(Monitor):
                 f"— {diag['quantity']} {diag['problem']} (value {diag['value']}, {diag['neighbours']} "
                 f"neighbours). Last good state (step {meta['step']}) "
                 + (f"saved to {path}" if path else "kept in memory (no output directory)")
-                + ". Try a smaller time step (scene.safety or dt_max), more artificial viscosity, "
+                + ". Try a smaller time step (the fluid scheme's safety or dt_max), more artificial viscosity, "
                 "or a finer resolution."
             )
             raise SimulationDiverged(msg, diag, path)

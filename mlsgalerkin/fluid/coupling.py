@@ -47,7 +47,7 @@ StructureCoupling(fluid='water', structure='gate', walls='gate_walls', wall_acce
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -55,11 +55,8 @@ from numpy.typing import NDArray
 from mlsgalerkin.contact import PenaltyContact
 from mlsgalerkin.contact.penalty import DEFAULT_ALPHA, DEFAULT_DAMPING, DEFAULT_FEATURE_ANGLE
 from mlsgalerkin.contact.surface import SurfacePoints, TrianglePoints
-from mlsgalerkin.dynamics import Interaction, Solver, Surface
+from mlsgalerkin.dynamics import Interaction, SceneView, Solver, Surface
 from mlsgalerkin.fluid.bodies import FluidBody, WallBody
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
 
 __all__ = ["AITKEN_RANGE", "StructureCoupling", "riding_kinematics"]
 
@@ -159,7 +156,7 @@ class StructureCoupling(Interaction):
                 f"tolerance={self.tolerance!r}, relaxation={self.relaxation!r}, contact={self.contact!r})")
 
     # ------------------------------------------------------------------ validation
-    def problems(self, scene: Scene) -> list[str]:
+    def problems(self, scene: SceneView) -> list[str]:
         owner = f"StructureCoupling {self.name!r}"
         out = super().problems(scene)
         bodies = {b.name: b for b in scene.bodies}

@@ -18,5 +18,6 @@ module                                         contents
 
 from mlsgalerkin.structure.elastic import ElasticBody, ElasticMaterial
 from mlsgalerkin.structure.rigid import Hinge, RigidBody
+from mlsgalerkin.structure.scheme import StructureScheme
 
-__all__ = ["ElasticBody", "ElasticMaterial", "Hinge", "RigidBody"]
+__all__ = ["ElasticBody", "ElasticMaterial", "Hinge", "RigidBody", "StructureScheme"]

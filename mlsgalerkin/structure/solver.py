@@ -11,8 +11,8 @@ Per outer step (:mod:`mlsgalerkin.dynamics`):
   nodes (cleared first, then accumulated over the exchange and the after-step exchange);
 - ``end_step``: nothing more to do; those forces drive the next step.
 
-The solver takes any outer step (``stable_time_step()`` is ``scene.dt_max``, or ``inf``; a scene of
-structures alone must give ``dt_max``): an explicit elastic body sub-cycles at its own limit,
+The solver takes any outer step (``stable_time_step()`` is its scheme's ``dt_max``, or ``inf``; a
+scene of structures alone must give ``StructureScheme(dt_max=...)``): an explicit elastic body sub-cycles at its own limit,
 Newmark and rigid bodies need none. The coupling is explicit and
 staggered; its time-step limit comes from the interactions (penalty contact) and the fluid.
 
@@ -31,18 +31,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
 
-from mlsgalerkin.dynamics import Body, Solver, Surface
+from mlsgalerkin.dynamics import Body, SceneView, Solver, Surface
 from mlsgalerkin.structure.elastic import ElasticBody
 from mlsgalerkin.structure.integrators import ElasticMotion, RigidMotion
 from mlsgalerkin.structure.rigid import RigidBody
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
+from mlsgalerkin.structure.scheme import StructureScheme
 
 __all__ = ["StructureSolver", "StructureState"]
 
@@ -100,13 +98,14 @@ class StructureSolver(Solver):
     """Advances the :class:`ElasticBody` and :class:`RigidBody` bodies of a scene (module docstring)."""
 
     key = "structure"
+    scheme_class = StructureScheme
 
     @classmethod
-    def problems(cls, bodies: list[Body], scene: Scene) -> list[str]:
+    def problems(cls, bodies: list[Body], scheme: StructureScheme, scene: SceneView) -> list[str]:
         out = []
-        if scene.dt_max is None and all(isinstance(b, (ElasticBody, RigidBody)) for b in scene.bodies):
-            out.append("a scene of structures alone needs an outer time step: set dt_max= (s); the structure "
-                       "solver sub-cycles inside whatever step it is given")
+        if scheme.dt_max is None and all(isinstance(b, (ElasticBody, RigidBody)) for b in scene.bodies):
+            out.append("a scene of structures alone needs an outer time step: list StructureScheme(dt_max=...) (s) "
+                       "in the scene's schemes; the structure solver sub-cycles inside whatever step it is given")
         for b in bodies:
             if not isinstance(b, (ElasticBody, RigidBody)):
                 out.append(f"body {b.name!r}: the structure solver advances ElasticBody and RigidBody, not "
@@ -116,8 +115,8 @@ class StructureSolver(Solver):
                            "singular); give clamped= or use the explicit integrator")
         return out
 
-    def __init__(self, bodies: list[Body], scene: Scene) -> None:
-        self.scene = scene
+    def __init__(self, bodies: list[Body], scheme: StructureScheme, scene: SceneView) -> None:
+        self.scheme = scheme
         self._state = StructureState({b.name: (ElasticMotion(b) if isinstance(b, ElasticBody) else RigidMotion(b))
                                       for b in bodies})
 
@@ -130,9 +129,9 @@ class StructureSolver(Solver):
             m.start()
 
     def stable_time_step(self) -> float:
-        """``scene.dt_max`` if given, else ``inf``: a structure takes whatever outer step the other
-        solvers and the interactions allow (it sub-cycles; Newmark and rigid bodies need none)."""
-        return math.inf if self.scene.dt_max is None else float(self.scene.dt_max)
+        """The scheme's ``dt_max`` if given, else ``inf``: a structure takes whatever outer step the
+        other solvers and the interactions allow (it sub-cycles; Newmark and rigid bodies need none)."""
+        return math.inf if self.scheme.dt_max is None else float(self.scheme.dt_max)
 
     def begin_step(self, t: float, dt: float) -> None:
         for m in self._state.motions.values():

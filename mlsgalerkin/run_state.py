@@ -1,0 +1,57 @@
+"""The :class:`RunState`: what monitors and probes see of a running simulation.
+
+A contract of the run loop (beside :mod:`mlsgalerkin.dynamics`): the time, the step, the last
+step size, each system's state and the interactions. It imports nothing from the run layer, so
+monitors, probes and solvers can name it without an import circle.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+__all__ = ["RunState"]
+
+
+@dataclass
+class RunState:
+    """What monitors and probes see: the time, the step, the last step size, the state of every
+    system (``systems["fluid"]`` is the :class:`~mlsgalerkin.fluid.state.FluidState`) and the
+    scene's interactions."""
+
+    t: float
+    step: int
+    dt: float
+    systems: dict[str, Any]
+    interactions: tuple = ()
+    _snapshot: Callable[[], tuple[dict, dict]] = field(repr=False, default=None)  # type: ignore[assignment]
+
+    @property
+    def fluid(self) -> Any:
+        """The fluid state (``None`` without fluid bodies)."""
+        return self.systems.get("fluid")
+
+    def observables(self) -> dict[str, dict[str, float]]:
+        """Each system's built-in time-series quantities, by system, then the interactions'
+        (under ``"interactions"``)."""
+        out = {k: s.observables() for k, s in self.systems.items() if hasattr(s, "observables")}
+        merged: dict[str, float] = {}
+        for i in self.interactions:
+            merged.update(i.observables())
+        if merged:
+            out["interactions"] = merged
+        return out
+
+    def health(self, limits: Any) -> dict | None:
+        """The first system's diagnosis of an unsound state (``None`` if all are sound)."""
+        for s in self.systems.values():
+            diag = s.health(limits) if hasattr(s, "health") else None
+            if diag is not None:
+                return diag
+        return None
+
+    def snapshot(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """Arrays and metadata of a checkpoint from which the run continues bit for bit."""
+        return self._snapshot()
