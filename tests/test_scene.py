@@ -23,6 +23,7 @@ from mlsgalerkin.fluid import (
     Walls,
     wall_box,
 )
+from mlsgalerkin.fluid.scheme import FluidScheme
 from mlsgalerkin.scene import Approximation, Probe, Scene, SceneError
 from mlsgalerkin.simulation import Simulation
 
@@ -50,12 +51,7 @@ def _problems(scene: Scene) -> str:
 
 # ------------------------------------------------------------------------------ validation
 def test_validation_lists_every_problem_at_once():
-    scene = Scene(
-        [_water(), "banana"],
-        [Gravity(), Walls("free_slip"), _Needy()],
-        t_end=-1.0,
-        name="broken",
-    )
+    scene = Scene([_water(), "banana"], [FluidScheme([Gravity(), Walls("free_slip"), _Needy()])], t_end=-1.0, name="broken")
     msg = _problems(scene)
     expected = [
         "unknown body 'banana'",
@@ -75,22 +71,19 @@ def test_validation_lists_every_problem_at_once():
 @pytest.mark.parametrize(
     "make, fragment",
     [
-        (lambda: Scene([_water()], [TaitPressure(10.0), TaitPressure(20.0)], t_end=0.1),
+        (lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0), TaitPressure(20.0)])], t_end=0.1),
          "two pressure models listed"),
-        (lambda: Scene([_water()], [TaitPressure(10.0), Gravity(), Gravity()], t_end=0.1),
+        (lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0), Gravity(), Gravity()])], t_end=0.1),
          "effects listed twice: ['Gravity']"),
-        (lambda: Scene([_water(), WallBody("w", np.array([[0.0, -0.01], [0.02, -0.01]]), DX)],
-                       [TaitPressure(10.0), Walls("free_slip")], t_end=0.1),
+        (lambda: Scene([_water(), WallBody("w", np.array([[0.0, -0.01], [0.02, -0.01]]), DX)], [FluidScheme([TaitPressure(10.0), Walls("free_slip")])], t_end=0.1),
          "free_slip needs wall normals"),
-        (lambda: Scene([_water()], [TaitPressure(10.0)], t_end=0.1,
-                       approximation=Approximation(kernel="no_such_kernel")),
+        (lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)], approximation=Approximation(kernel="no_such_kernel"))], t_end=0.1),
          "unknown kernel 'no_such_kernel'"),
-        (lambda: Scene([_water()], [TaitPressure(10.0)], t_end=0.1,
-                       probes=[Probe("T_mean", lambda s: 0.0, reads=("temperature",))]),
+        (lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)])], t_end=0.1, probes=[Probe("T_mean", lambda s: 0.0, reads=("temperature",))]),
          "probe 'T_mean' reads ['temperature']"),
-        (lambda: Scene([_water(), wall_box((0, 0), (0.2, 0.2), DX)], [TaitPressure(10.0)], t_end=0.1),
+        (lambda: Scene([_water(), wall_box((0, 0), (0.2, 0.2), DX)], [FluidScheme([TaitPressure(10.0)])], t_end=0.1),
          "no wall treatment: list Walls()"),
-        (lambda: Scene([_water()], [TaitPressure(10.0), "viscosity"], t_end=0.1),
+        (lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0), "viscosity"])], t_end=0.1),
          "unknown effect 'viscosity'"),
     ],
     ids=["two_pressure", "duplicate", "free_slip_no_normals", "kernel", "probe", "walls_untreated",
@@ -101,8 +94,7 @@ def test_single_problems_are_reported(make, fragment):
 
 
 def test_valid_scene_passes():
-    Scene([_water(), wall_box((0, 0), (0.2, 0.2), DX)],
-          [TaitPressure(10.0), Gravity(), Walls("free_slip")], t_end=0.1).validate()
+    Scene([_water(), wall_box((0, 0), (0.2, 0.2), DX)], [FluidScheme([TaitPressure(10.0), Gravity(), Walls("free_slip")])], t_end=0.1).validate()
 
 
 def test_simulation_validates_before_any_work(monkeypatch):
@@ -119,7 +111,7 @@ def test_simulation_validates_before_any_work(monkeypatch):
         def setup(self, state, scene):
             setups.append(1)
 
-    scene = Scene([_water()], [Gravity(), Recorder(), _Needy()], t_end=0.0)
+    scene = Scene([_water()], [FluidScheme([Gravity(), Recorder(), _Needy()])], t_end=0.0)
     with pytest.raises(SceneError) as err:
         Simulation(scene)
     assert "no pressure model" in str(err.value) and "t_end must be positive" in str(err.value)
@@ -154,7 +146,7 @@ def calls(monkeypatch):
 
 def test_only_listed_effects_are_called(calls):
     fl = _water(velocity=(0.1, 0.0))
-    Simulation(Scene([fl], [TaitPressure(10.0)], t_end=0.01)).run(progress=False)
+    Simulation(Scene([fl], [FluidScheme([TaitPressure(10.0)])], t_end=0.01)).run(progress=False)
     called = {c for c, _ in calls}
     assert called == {"TaitPressure"}, called
     # the pressure model ran in its stage and supplied a time-step limit
@@ -174,7 +166,7 @@ def test_custom_effect_is_called_in_its_declared_stages_only(calls):
         def force(self, s): calls.append(("Probe2", "force"))
         def after_step(self, s): calls.append(("Probe2", "after_step"))
 
-    sim = Simulation(Scene([_water()], [TaitPressure(10.0), Probe2()], t_end=1.0))
+    sim = Simulation(Scene([_water()], [FluidScheme([TaitPressure(10.0), Probe2()])], t_end=1.0))
     res = sim.run(progress=False, max_steps=5)
     mine = [m for c, m in calls if c == "Probe2"]
     # stress: once per evaluation (initial + one per kdk step); after_step once per step
@@ -189,7 +181,7 @@ def test_time_report_has_one_entry_per_listed_effect():
     walls = wall_box((0, 0), (0.2, 0.2), DX)
     listed = [TaitPressure(20.0), Gravity(), Walls("free_slip"), MonaghanViscosity(0.1),
               DensityFilter(5)]
-    res = Simulation(Scene([_water(), walls], listed, t_end=0.01)).run(progress=False)
+    res = Simulation(Scene([_water(), walls], [FluidScheme(listed)], t_end=0.01)).run(progress=False)
     report = res.summary["fluid"]["time_per_stage_s"]
     for e in listed:
         assert e.name in report and report[e.name] >= 0.0

@@ -10,9 +10,11 @@ from skfem import MeshHex, MeshTet
 
 from mlsgalerkin.contact import PenaltyContact
 from mlsgalerkin.fluid import FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure
+from mlsgalerkin.fluid.scheme import FluidScheme
 from mlsgalerkin.scene import Scene
 from mlsgalerkin.simulation import Simulation
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial
+from mlsgalerkin.structure.scheme import StructureScheme
 
 L, H, E, P = 1.0, 0.1, 1e7, 10.0
 
@@ -53,8 +55,7 @@ def test_a_3d_water_block_lands_on_a_clamped_plate():
     plate = ElasticBody("plate", mesh, ElasticMaterial(1e7, 0.3, 1000.0), "Hex1", clamped=edge,
                         wet=lambda x: np.isclose(x[2], 0.0), points={"mid": (0.1, 0.1, -0.005)})
     water = FluidBody.block("water", (0.07, 0.07, 0.005), (0.13, 0.13, 0.065), dx, [Phase("water", 1000.0)])
-    scene = Scene([water, plate], [TaitPressure(10.0), Gravity((0.0, 0.0, -9.81)), MonaghanViscosity(0.1)],
-                  t_end=0.1, interactions=[PenaltyContact("water", "plate", thickness=0.5 * dx)])
+    scene = Scene([water, plate], [FluidScheme([TaitPressure(10.0), Gravity((0.0, 0.0, -9.81)), MonaghanViscosity(0.1)])], t_end=0.1, interactions=[PenaltyContact("water", "plate", thickness=0.5 * dx)])
     res = Simulation(scene).run(progress=False)
     ts = res.timeseries
     assert res.summary["status"] == "completed"
@@ -83,7 +84,7 @@ def test_3d_rigid_body_on_a_hinge_swings_with_its_dry_period():
                       gravity=(0.0, 0.0, -9.81), angular_velocity=0.1)
     expected = 2 * np.pi / np.sqrt((200.0 - m * 9.81 * L / 2) / (m * (L**2 + t**2) / 12 + m * (L / 2) ** 2))
     assert plank.natural_period() == pytest.approx(expected, rel=1e-12)
-    res = Simulation(Scene([plank], [], t_end=3 * expected, dt_max=expected / 200)).run(progress=False)
+    res = Simulation(Scene([plank], [StructureScheme(dt_max=expected / 200)], t_end=3 * expected)).run(progress=False)
     ts = res.timeseries
     t_, a = np.asarray(ts["time"]), np.asarray(ts["plank_angle"])
     k = np.flatnonzero((a[:-1] < 0) & (a[1:] >= 0))
@@ -99,7 +100,7 @@ def test_3d_rigid_body_falls_vertically():
 
     box = RigidBody("box", _box((0, 0, 1.0), (0.2, 0.2, 1.2)), 5.0, 0.1, (0.1, 0.1, 1.1), constraint="vertical",
                     gravity=(0.0, 0.0, -9.81))
-    res = Simulation(Scene([box], [], t_end=0.2, dt_max=1e-3)).run(progress=False)
+    res = Simulation(Scene([box], [StructureScheme(dt_max=1e-3)], t_end=0.2)).run(progress=False)
     body = res.state.systems["structure"].body("box")
     assert body.V == pytest.approx([0.0, 0.0, -9.81 * 0.2], abs=1e-9)
     assert body.c[2] - 1.1 == pytest.approx(-0.5 * 9.81 * 0.2**2, rel=1e-6)
@@ -241,7 +242,7 @@ def test_free_3d_body_falls_with_its_spin_unchanged():
 
     w0, g, t = (0.3, -0.5, 2.0), 9.81, 0.2
     body = _free_box((0.1, 0.15, 0.2), w0, name="box", gravity=(0.0, 0.0, -g))
-    res = Simulation(Scene([body], [], t_end=t, dt_max=1e-3)).run(progress=False)
+    res = Simulation(Scene([body], [StructureScheme(dt_max=1e-3)], t_end=t)).run(progress=False)
     m = res.state.systems["structure"].body("box")
     assert res.state.t == pytest.approx(t, rel=1e-12)
     assert m.V == pytest.approx([0.0, 0.0, -g * t], abs=1e-12)
@@ -336,8 +337,7 @@ def test_free_3d_checkpoint_continues_bit_for_bit(tmp_path):
     assert straight.observables() == second.observables()
 
     def scene():
-        return Scene([_free_box((0.1, 0.15, 0.2), (0.3, -0.5, 2.0), name="box", gravity=(0.0, 0.0, -9.81))], [],
-                     t_end=0.05, dt_max=1e-3)
+        return Scene([_free_box((0.1, 0.15, 0.2), (0.3, -0.5, 2.0), name="box", gravity=(0.0, 0.0, -9.81))], [StructureScheme(dt_max=1e-3)], t_end=0.05)
 
     whole = Simulation(scene()).run(progress=False)
     Simulation(scene()).run(out=tmp_path, progress=False, max_steps=17)
@@ -526,11 +526,8 @@ def _water_on_a_3d_plate(t_end: float, ny: int = 10, nx: int = 5):
     walls = WallBody("sides", sides, dx, normals=nrm, reference_density=rho)
     coupling = StructureCoupling("water", "plate", walls="plate_walls", thickness=0.25 * dx, wall_acceleration=1.0)
     n = water.n
-    scene = Scene([water, walls, riding, plate],
-                  [TaitPressure(c0), Gravity((0.0, 0.0, -g)), Walls("free_slip"), MonaghanViscosity(0.2),
-                   DensityFilter(20)],
-                  t_end=t_end, approximation=Approximation(h_factor=1.3), interactions=[coupling],
-                  probes=[Probe("lowest_water", lambda state: float(state.fluid.x[:n, 2].min()))])
+    scene = Scene([water, walls, riding, plate], [FluidScheme([TaitPressure(c0), Gravity((0.0, 0.0, -g)), Walls("free_slip"), MonaghanViscosity(0.2),
+                   DensityFilter(20)], approximation=Approximation(h_factor=1.3))], t_end=t_end, interactions=[coupling], probes=[Probe("lowest_water", lambda state: float(state.fluid.x[:n, 2].min()))])
     return scene, plate, water.n * rho * dx**3 * g, rho * g * H
 
 
