@@ -162,21 +162,29 @@ class Scene:
         return next((sc for sc in self.schemes if hasattr(sc, "effects")), None)
 
     def _legacy_option(self, name: str) -> Any:
-        warnings.warn(f"Scene.{name} is deprecated: the fluid's settings live in its scheme; read "
+        warnings.warn(f"Scene.{name} is deprecated: the fluid's settings live in its scheme; use "
                       f"scene.schemes[k].{name} of the FluidScheme", DeprecationWarning, stacklevel=3)
         fluid = self._fluid_scheme()
         if fluid is None:
             raise AttributeError(f"this scene has no FluidScheme, so no {name}")
-        return getattr(fluid, name)
+        return fluid
 
-    effects = property(lambda self: self._legacy_option("effects"),
-                       doc="Deprecated: the fluid scheme's effects (``FluidScheme.effects``).")
-    approximation = property(lambda self: self._legacy_option("approximation"),
-                             doc="Deprecated: ``FluidScheme.approximation``.")
-    integrator = property(lambda self: self._legacy_option("integrator"), doc="Deprecated: ``FluidScheme.integrator``.")
-    mass = property(lambda self: self._legacy_option("mass"), doc="Deprecated: ``FluidScheme.mass``.")
-    dt_max = property(lambda self: self._legacy_option("dt_max"), doc="Deprecated: ``FluidScheme.dt_max``.")
-    safety = property(lambda self: self._legacy_option("safety"), doc="Deprecated: ``FluidScheme.safety``.")
+    @staticmethod
+    def _legacy_property(name: str) -> property:
+        def get(self: "Scene") -> Any:
+            return getattr(self._legacy_option(name), name)
+
+        def put(self: "Scene", value: Any) -> None:
+            setattr(self._legacy_option(name), name, value)
+
+        return property(get, put, doc=f"Deprecated: ``FluidScheme.{name}`` of the scene's fluid scheme.")
+
+    effects = _legacy_property("effects")
+    approximation = _legacy_property("approximation")
+    integrator = _legacy_property("integrator")
+    mass = _legacy_property("mass")
+    dt_max = _legacy_property("dt_max")
+    safety = _legacy_property("safety")
 
     # ------------------------------------------------------------------ validation
     def problems(self) -> list[str]:

@@ -155,7 +155,7 @@ def test_pressurised_box_is_stable_only_with_the_correction(vci):
 
 def test_summary_and_bad_input():
     sim, _ = closed_box(100.0, [ConsistentIntegration()])
-    eff = next(e for e in sim.scene.effects if isinstance(e, ConsistentIntegration))
+    eff = next(e for e in sim.scene.schemes[0].effects if isinstance(e, ConsistentIntegration))
     summary = eff.summary()
     assert summary["full_correction_share_at_end"] == 1.0
     body = FluidBody.block("fluid", (0.0, 0.0), (0.03, 0.03), DX, [Phase("water", 1000.0)])

@@ -192,3 +192,81 @@ def test_time_report_has_one_entry_per_listed_effect():
     for stage in ("neighbors", "shape_functions", "velocity_gradient", "internal_force", "integrate"):
         assert stage in report
     assert sum(res.summary["fluid"]["time_per_stage_fraction"].values()) == pytest.approx(1.0, abs=1e-3)
+
+
+# ------------------------------------------------------------------------------ schemes
+def _legacy_scene(**options):
+    walls = wall_box((0.0, 0.0), (0.3, 0.2), DX, layers=3)
+    return Scene([_water(), walls], [TaitPressure(10.0), Gravity(), Walls("free_slip")], t_end=0.01, **options)
+
+
+def test_the_scene_before_schemes_runs_with_a_warning_that_shows_the_new_form():
+    with pytest.warns(DeprecationWarning, match=r"schemes=\[FluidScheme\(effects, approximation=\.\.\., dt_max=\.\.\.\)\]"):
+        old = _legacy_scene(approximation=Approximation(h_factor=1.5), dt_max=1e-4)
+    (fluid,) = old.schemes
+    assert isinstance(fluid, FluidScheme)
+    assert fluid.approximation.h_factor == 1.5 and fluid.dt_max == 1e-4
+    assert [type(e).__name__ for e in fluid.effects] == ["TaitPressure", "Gravity", "Walls"]
+    with pytest.warns(DeprecationWarning, match="FluidScheme"):
+        assert old.effects is fluid.effects and old.dt_max == 1e-4   # old attribute reads still work
+    new = Scene(old.bodies, [FluidScheme(list(fluid.effects), approximation=Approximation(h_factor=1.5),
+                                         dt_max=1e-4)], t_end=0.01)
+    a = Simulation(old).run(progress=False).timeseries
+    b = Simulation(new).run(progress=False).timeseries
+    assert all(np.array_equal(a[k], b[k]) for k in a)          # the same run, bit for bit
+
+
+def test_validation_reads_only():
+    """Validating a scene changes nothing in it (repr of every piece before and after)."""
+    scene = Scene([_water(), wall_box((0.0, 0.0), (0.3, 0.2), DX, layers=3)],
+                  [fluid_mod.water(10.0, spacing=DX)], t_end=0.01)
+    before = repr([scene.schemes, [vars(e) for e in scene.schemes[0].effects]])
+    scene.validate()
+    scene.validate()
+    assert repr([scene.schemes, [vars(e) for e in scene.schemes[0].effects]]) == before
+
+
+def test_one_spacing_walls_on_another_lattice_are_refused():
+    coarse = wall_box((0.0, 0.0), (0.3, 0.2), 2 * DX, layers=3)
+    msg = _problems(Scene([_water(), coarse], [FluidScheme([TaitPressure(10.0), Walls()])], t_end=0.1))
+    assert f"has particles {2 * DX:g} m apart but the fluid's spacing is {DX:g} m" in msg
+    msg = _problems(Scene([_water()], [FluidScheme([TaitPressure(10.0)], spacing=0.5 * DX)], t_end=0.1))
+    assert "are not built at the scheme's spacing" in msg
+
+
+def test_scheme_problems_and_unknown_or_doubled_schemes_are_reported():
+    msg = _problems(Scene([_water()], [FluidScheme([TaitPressure(10.0)], safety=2.0, mass="heavy"), "fast"],
+                          t_end=0.1))
+    assert "safety factor must be in (0, 1.5]" in msg and "mass must be" in msg
+    assert "unknown scheme 'fast'" in msg
+    msg = _problems(Scene([_water()], [FluidScheme([TaitPressure(10.0)]), FluidScheme([TaitPressure(10.0)])],
+                          t_end=0.1))
+    assert "two schemes for one solver" in msg
+
+
+def test_a_scheme_without_its_bodies_is_reported():
+    from mlsgalerkin.structure import StructureScheme
+
+    msg = _problems(Scene([_water()], [FluidScheme([TaitPressure(10.0)]), StructureScheme(dt_max=1e-3)], t_end=0.1))
+    assert "StructureScheme is listed but no body is advanced by its solver" in msg
+
+
+def test_water_preset_is_the_impact_problems_set():
+    scheme = fluid_mod.water(20.0, spacing=0.01, penalty_thickness=0.0025)
+    assert [type(e).__name__ for e in scheme.effects] == [
+        "TaitPressure", "Gravity", "Walls", "MonaghanViscosity", "DensityDiffusion", "ParticleShifting", "PenaltyWalls"]
+    pressure, _, _, viscosity, diffusion, *_ = scheme.effects
+    assert pressure.c0 == 20.0 and pressure.negative_pressure == "cavitate"
+    assert viscosity.alpha == 0.02 and diffusion.delta == 0.1
+    assert scheme.spacing == 0.01 and scheme.approximation.h_factor == 1.3
+    assert scheme.pressure_model() is pressure and scheme.provides("gravity")
+
+
+def test_effects_read_the_sound_speed_from_the_state():
+    """The pressure model is set up first and writes c0 into the state; the effects that scale
+    with it read it there, whatever the listed order."""
+    walls = wall_box((0.0, 0.0), (0.3, 0.2), DX, layers=3)
+    effects = [MonaghanViscosity(0.1), Gravity(), Walls(), TaitPressure(12.5)]   # pressure listed last
+    sim = Simulation(Scene([_water(), walls], [FluidScheme(effects)], t_end=0.01))
+    assert sim.state.fluid.c0 == 12.5
+    assert effects[0].nu == pytest.approx(0.1 * 1.3 * DX * 12.5 / 8)
