@@ -52,6 +52,24 @@ class RunState:
                 return diag
         return None
 
+    def body(self, name: str) -> Any:
+        """The live state of body ``name``, from the system that advances it: for an elastic body
+        its nodal displacements ``u`` and velocities ``v`` (m, m/s; ``(n_dofs,)``), for a rigid
+        body its centre ``X``, velocity ``V``, angle ``theta`` and surface load ``F`` (SI units).
+        This is how a probe reads a structure::
+
+            Probe("tip_x", lambda state: float(state.body("beam").u[k]))
+
+        Raises ``KeyError`` naming the bodies that have a live state."""
+        known: list[str] = []
+        for system in self.systems.values():
+            find = getattr(system, "body", None)
+            names = list(getattr(system, "body_names", lambda: [])())
+            if find is not None and name in names:
+                return find(name)
+            known += names
+        raise KeyError(f"no body {name!r} with a live state in this run; bodies with one: {known}")
+
     def snapshot(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         """Arrays and metadata of a checkpoint from which the run continues bit for bit."""
         return self._snapshot()

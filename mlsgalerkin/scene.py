@@ -111,6 +111,11 @@ class Scene:
         self.bodies = list(bodies)
         schemes = list(schemes)
         if effects is not None or legacy or any(not isinstance(x, Scheme) and _looks_like_effect(x) for x in schemes):
+            if any(isinstance(x, Scheme) for x in schemes):
+                given = sorted(set(legacy) | ({"effects"} if effects is not None else set()))
+                raise TypeError(f"Scene() got schemes and the fluid's options {given or ['effects']} on the scene: give "
+                                "them to the FluidScheme (FluidScheme(effects, approximation=..., dt_max=...)), not the "
+                                "Scene")
             schemes = _legacy_schemes(self.bodies, schemes, effects, legacy)
         self.schemes: list = schemes
         self.t_end = t_end
@@ -278,8 +283,8 @@ def _legacy_schemes(bodies: list, listed: list, effects: Sequence | None, option
     """The schemes of the form before schemes: ``Scene(bodies, effects, approximation=...,
     integrator=..., mass=..., dt_max=..., safety=...)``, with a warning that shows the new form."""
     if effects is None:
-        effects = [x for x in listed if not isinstance(x, Scheme)]
-    schemes = [x for x in listed if isinstance(x, Scheme)]
+        effects = listed
+    schemes: list = []
     shown = ", ".join(f"{k}=..." for k in _LEGACY_OPTIONS if k in options)
     warnings.warn(
         "Scene(bodies, effects, ...) with the fluid's options on the scene is deprecated and will be removed in the "

@@ -42,6 +42,11 @@ WATER = [Phase("water", 1000.0)]
 
 
 # ------------------------------------------------------------------------------ scenes
+
+def _scheme_options(kw: dict) -> dict:
+    """Take the fluid scheme's options (approximation, integrator, mass, safety, dt_max) out of ``kw``."""
+    return {k: kw.pop(k) for k in ("approximation", "integrator", "mass", "safety", "dt_max") if k in kw}
+
 def hydrostatic_tank(dx=0.02, H=0.4, W=0.4, t_end=0.3, effects=None, **scene_kw) -> Scene:
     """Water at hydrostatic rest in a walled box (free-slip walls, open top)."""
     c0 = 10.0 * math.sqrt(2.0 * G * H)
@@ -52,7 +57,7 @@ def hydrostatic_tank(dx=0.02, H=0.4, W=0.4, t_end=0.3, effects=None, **scene_kw)
     if effects is None:
         effects = [MonaghanViscosity(0.1), DensityFilter(20)]
     listed = [TaitPressure(c0), Gravity(), Walls("free_slip")] + list(effects)
-    return Scene([fl, walls], [FluidScheme(listed)], t_end=t_end, name="hydrostatic_tank", **scene_kw)
+    return Scene([fl, walls], [FluidScheme(listed, **_scheme_options(scene_kw))], t_end=t_end, name="hydrostatic_tank", **scene_kw)
 
 
 def free_block(dx=0.02, size=0.2, velocity=(0.0, 0.0), effects=(), gravity=False, c0=20.0,
@@ -60,7 +65,7 @@ def free_block(dx=0.02, size=0.2, velocity=(0.0, 0.0), effects=(), gravity=False
     """A block of water at the reference density (p = 0), no walls."""
     fl = FluidBody.block("water", (0.0, 0.0), (size, size), dx, WATER, velocity=velocity)
     listed = [TaitPressure(c0)] + ([Gravity()] if gravity else []) + list(effects)
-    return Scene([fl], [FluidScheme(listed)], t_end=t_end, **scene_kw)
+    return Scene([fl], [FluidScheme(listed, **_scheme_options(scene_kw))], t_end=t_end, **scene_kw)
 
 
 # ------------------------------------------------------------------ hydrostatic (shared)

@@ -63,6 +63,10 @@ class StructureState:
         """The state and integrator of body ``name``."""
         return self.motions[name]
 
+    def body_names(self) -> list[str]:
+        """The names of the bodies with a live state here, in scene order."""
+        return list(self.motions)
+
     def observables(self) -> dict[str, float]:
         row: dict[str, float] = {}
         for name, m in self.motions.items():
