@@ -19,14 +19,16 @@ the solver that advances them (every :class:`Body` names its solver class), and 
 
 A body kind that should take part implements a :class:`Body` (data: geometry, material,
 initial state) and a :class:`Solver` (state and how it advances, with its own integrator and
-sub-steps). Nothing in the loop changes. See ``docs/architecture.md``.
+sub-steps) whose state is a :class:`SystemState` (what monitors see: observables, health as a
+:class:`Diagnosis`, VTU frames). Nothing in the loop changes. See ``docs/architecture.md``.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, ClassVar
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,7 +36,7 @@ from numpy.typing import NDArray
 if TYPE_CHECKING:  # pragma: no cover
     from mlsgalerkin.scene import Scene
 
-__all__ = ["Body", "Interaction", "Solver", "Surface"]
+__all__ = ["Body", "Diagnosis", "Interaction", "Solver", "Surface", "SystemState"]
 
 
 class Body:
@@ -111,8 +113,8 @@ class Solver(ABC):
 
     @property
     @abstractmethod
-    def state(self) -> Any:
-        """This solver's state (what monitors and probes see)."""
+    def state(self) -> "SystemState":
+        """This solver's state (what monitors and probes see): a :class:`SystemState`."""
 
     @abstractmethod
     def start(self) -> None:
@@ -223,3 +225,170 @@ class Interaction(ABC):
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
         """Restore what :meth:`state_dict` returned (before the first step after a restart)."""
+
+
+# --------------------------------------------------------------------------------------
+# what monitors see of a solver: its state, and why that state is unsound
+# --------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """Why a system's state is unsound: what :meth:`SystemState.health` returns, the watchdog
+    reports and ``summary.json`` keeps under ``"diagnosis"`` (:meth:`as_dict`).
+
+    A system fills in what it knows; the run loop completes ``system``, ``step`` and ``time``
+    (:meth:`completed`).
+
+    Attributes
+    ----------
+    quantity : str
+        What is wrong: ``"velocity"``, ``"density"``, ``"displacement"``, ...
+    value : tuple of float
+        Its value at the bad point (SI units of the quantity; a vector's components).
+    problem : str
+        What is wrong with it, to follow the quantity's name: ``"is not finite"``,
+        ``"ρ/ρ0 = 2.31 is outside [0.5, 2.0]"``, ``"|u| = 3.2 m exceeds 1 m"``.
+    limit : float or tuple of float, optional
+        The limit it broke (same units; a range as ``(lo, hi)``); ``None`` for a non-finite value.
+    body : str, optional
+        Name of the body the bad point belongs to.
+    point : str, optional
+        What :attr:`index` counts: ``"particle"``, ``"node"``; ``None`` when the whole body is bad.
+    index : int, optional
+        Index of the bad point within its system (a particle) or its body (a node).
+    position : tuple of float, optional
+        Where the point is (m, ``(d,)``): its current position, or with :attr:`at_rest` its
+        position at rest (a structure node, whose current position may not be finite).
+    at_rest : bool
+        Whether :attr:`position` is the rest position.
+    system : str, optional
+        Key of the system in ``RunState.systems`` (``"fluid"``, ``"structure"``).
+    step, time : int and float, optional
+        The step and time (s) at which the state was found unsound.
+    hint : str
+        What to try (one sentence; the watchdog appends it to its message).
+    extras : mapping
+        Further JSON-serialisable facts, kept as keys of :meth:`as_dict` (the fluid's
+        ``neighbours``: the bad particle's neighbour count).
+    """
+
+    quantity: str
+    value: tuple[float, ...]
+    problem: str
+    limit: float | tuple[float, ...] | None = None
+    body: str | None = None
+    point: str | None = None
+    index: int | None = None
+    position: tuple[float, ...] | None = None
+    at_rest: bool = False
+    system: str | None = None
+    step: int | None = None
+    time: float | None = None
+    hint: str = ""
+    extras: Mapping[str, Any] = field(default_factory=dict, hash=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "value", _floats(self.value))
+        if self.position is not None:
+            object.__setattr__(self, "position", _floats(self.position))
+        if isinstance(self.limit, (tuple, list, np.ndarray)):
+            object.__setattr__(self, "limit", _floats(self.limit))
+        if self.index is not None:
+            object.__setattr__(self, "index", int(self.index))
+
+    def completed(self, *, system: str, step: int, time: float) -> "Diagnosis":
+        """This diagnosis with ``system``, ``step`` and ``time`` filled in where it left them out."""
+        return replace(self, system=self.system if self.system is not None else system,
+                       step=self.step if self.step is not None else int(step),
+                       time=self.time if self.time is not None else float(time))
+
+    @property
+    def where(self) -> str:
+        """The bad point in words: ``"particle 7 of body 'water' at [0.1, 0.2]"``."""
+        parts = []
+        if self.point is not None and self.index is not None:
+            parts.append(f"{self.point} {self.index}")
+        if self.body is not None:
+            parts.append(f"of body {self.body!r}" if parts else f"body {self.body!r}")
+        if self.position is not None:
+            at = "at rest at" if self.at_rest else "at"
+            parts.append(f"{at} {np.round(self.position, 6).tolist()}")
+        where = " ".join(parts) or "the state"
+        return f"{self.system} {where}" if self.system else where
+
+    @property
+    def message(self) -> str:
+        """One line for a human: when, where, what, the value and the limit, the extras."""
+        when = f"at step {self.step}" if self.step is not None else "at an unknown step"
+        if self.time is not None:
+            when += f" (t = {self.time:.6g} s)"
+        facts = [f"value {list(self.value)}"]
+        if self.limit is not None:
+            facts.append(f"limit {list(self.limit) if isinstance(self.limit, tuple) else self.limit}")
+        facts += [f"{k} {v}" for k, v in self.extras.items()]
+        return f"{when}: {self.where} — {self.quantity} {self.problem} ({', '.join(facts)})"
+
+    def as_dict(self) -> dict[str, Any]:
+        """The JSON record of ``summary.json``: every attribute, the :attr:`message`, the
+        :attr:`extras` as keys of their own, and the index once more under the name of its
+        point (``"particle": 7``, ``"node": 12``)."""
+        out: dict[str, Any] = {
+            "system": self.system, "body": self.body, "quantity": self.quantity, "value": list(self.value),
+            "problem": self.problem, "limit": list(self.limit) if isinstance(self.limit, tuple) else self.limit,
+            "point": self.point, "index": self.index,
+            "position": None if self.position is None else list(self.position), "at_rest": self.at_rest,
+            "step": self.step, "time": self.time, "message": self.message, "hint": self.hint,
+        }
+        if self.point is not None and self.point not in out:
+            out[self.point] = self.index
+        out.update({k: v for k, v in self.extras.items() if k not in out})
+        return out
+
+    @classmethod
+    def from_mapping(cls, d: Mapping[str, Any]) -> "Diagnosis":
+        """A diagnosis from a plain dict of the keys of :meth:`as_dict` (what a system's
+        ``health`` returned before this record existed); unknown keys go to :attr:`extras`."""
+        known = {"quantity", "value", "problem", "limit", "body", "point", "index", "position", "at_rest", "system",
+                 "step", "time", "hint"}
+        kw: dict[str, Any] = {k: d[k] for k in known if k in d}
+        if "index" not in kw and "particle" in d:
+            kw["point"], kw["index"] = "particle", d["particle"]
+        kw.setdefault("quantity", "state")
+        kw.setdefault("value", ())
+        kw.setdefault("problem", "is unsound")
+        extras = {k: v for k, v in d.items() if k not in known and k not in ("message", kw.get("point"))}
+        return cls(**kw, extras=extras)
+
+
+def _floats(x: Any) -> tuple[float, ...]:
+    return tuple(float(v) for v in np.atleast_1d(np.asarray(x, dtype=float)).ravel())
+
+
+@runtime_checkable
+class SystemState(Protocol):
+    """What the run loop and the monitors call on a solver's state (``RunState.systems[key]``,
+    :attr:`Solver.state`). Monitors never see the solvers, only these.
+
+    Optional members, looked up with ``getattr``: ``frame_name`` (str, the name of the VTU
+    series, default the solver's key), ``frame_cells()`` (the cells on :meth:`frame`'s points: a
+    list of ``(vtk cell type, (n_cells, k) int array)``, or one such pair) and ``n`` (the number
+    of nodes counted in the run's throughput, default 0).
+    """
+
+    def observables(self) -> dict[str, float]:
+        """The built-in time-series columns of this system, ``name -> value`` (SI units; the
+        same names at every step from the first, so the columns of ``timeseries.csv`` stay
+        fixed)."""
+        ...
+
+    def health(self, limits: Any) -> Diagnosis | None:
+        """``None`` if the state is sound, else a :class:`Diagnosis` of its first bad point.
+        ``limits`` is the :class:`~mlsgalerkin.monitors.Watchdog`; a system reads the limits that
+        concern it (``density_ratio``, ``max_speed``, ``max_displacement``), with ``getattr`` and
+        a default for a limit it may not have. Called after every step: cheap when sound."""
+        ...
+
+    def frame(self) -> tuple[NDArray[np.float64], dict[str, NDArray]]:
+        """A VTU frame: points ``(n, d)`` (m) and point data, name -> ``(n,)`` or ``(n, d)`` array."""
+        ...

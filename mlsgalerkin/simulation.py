@@ -26,6 +26,7 @@ import logging
 import signal
 import threading
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
@@ -33,7 +34,7 @@ from typing import Any, Callable
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from mlsgalerkin.dynamics import Solver
+from mlsgalerkin.dynamics import Diagnosis, Solver, SystemState
 from mlsgalerkin.monitors import (
     Checkpoints,
     Frames,
@@ -132,12 +133,19 @@ class RunState:
             out["interactions"] = merged
         return out
 
-    def health(self, limits: Any) -> dict | None:
-        """The first system's diagnosis of an unsound state (``None`` if all are sound)."""
-        for s in self.systems.values():
+    def health(self, limits: Any) -> Diagnosis | None:
+        """The first system's :class:`~mlsgalerkin.dynamics.Diagnosis` of an unsound state, with
+        the system's key, the step and the time filled in (``None`` if all are sound)."""
+        for key, s in self.systems.items():
             diag = s.health(limits) if hasattr(s, "health") else None
-            if diag is not None:
-                return diag
+            if diag is None:
+                continue
+            if not isinstance(diag, Diagnosis):
+                warnings.warn(f"the health() of system {key!r} returned a {type(diag).__name__}; return a "
+                              "mlsgalerkin.dynamics.Diagnosis (a plain dict is read for one release)",
+                              DeprecationWarning, stacklevel=2)
+                diag = Diagnosis.from_mapping(diag)
+            return diag.completed(system=key, step=self.step, time=self.t)
         return None
 
     def snapshot(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
@@ -167,6 +175,9 @@ class Simulation:
         self._solver_of: dict[str, Solver] = {}  # body name -> the solver that advances it
         for cls, bodies in scene.solver_groups().items():
             solver = cls(bodies, scene)
+            if not isinstance(solver.state, SystemState):
+                raise TypeError(f"{cls.__name__}.state is a {type(solver.state).__name__}, which lacks what monitors "
+                                "call (observables(), health(limits), frame()): see mlsgalerkin.dynamics.SystemState")
             self.solvers.append(solver)
             self._solver_of.update({b.name: solver for b in bodies})
         self.state = RunState(t=0.0, step=0, dt=0.0, systems={s.key: s.state for s in self.solvers},
