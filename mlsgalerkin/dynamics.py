@@ -25,6 +25,7 @@ sub-steps) whose state is a :class:`SystemState` (what monitors see: observables
 
 from __future__ import annotations
 
+import importlib
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -36,7 +37,17 @@ from numpy.typing import NDArray
 if TYPE_CHECKING:  # pragma: no cover
     from mlsgalerkin.scene import Scene
 
-__all__ = ["Body", "Diagnosis", "Interaction", "Solver", "Surface", "SystemState"]
+__all__ = [
+    "Body",
+    "CarriesStepEndLoad",
+    "Diagnosis",
+    "DrivesWalls",
+    "Interaction",
+    "Solver",
+    "Surface",
+    "SystemState",
+    "solver_class_of",
+]
 
 
 class Body:
@@ -171,10 +182,35 @@ class Interaction(ABC):
     second: str
 
     def problems(self, scene: "Scene") -> list[str]:
-        """Every problem with this interaction in ``scene`` (empty if none)."""
+        """Every problem with this interaction in ``scene`` (empty if none). Validation only:
+        it changes nothing (what the run needs from the scene is taken in :meth:`setup`)."""
         names = {b.name for b in scene.bodies}
         return [f"interaction {self.name!r}: no body named {b!r}" for b in (self.first, self.second)
                 if b not in names]
+
+    def setup(self, scene: "Scene") -> None:
+        """Take what the run needs from the validated ``scene`` (called once when the
+        :class:`~mlsgalerkin.simulation.Simulation` is built, before the first step or a
+        restore)."""
+
+    def capability_problems(self, body: Body, capability: type, doing: str, when: str = "") -> list[str]:
+        """``[]`` if the solver of ``body`` implements the optional protocol ``capability``
+        (:class:`DrivesWalls`, :class:`CarriesStepEndLoad`), else the problem, naming what the
+        solver cannot do (``doing``), the methods it lacks and the kind of interaction (with
+        ``when``, the setting that needs it) that needs them."""
+        try:
+            cls = solver_class_of(body)
+        except (ImportError, AttributeError):
+            return []  # the scene reports a solver that cannot be imported
+        # the methods looked up each time (``issubclass`` on a protocol caches its answers)
+        methods = [n for n, v in vars(capability).items() if not n.startswith("_") and callable(v)]
+        lacks = [n for n in methods if not callable(getattr(cls, n, None))]
+        if not lacks:
+            return []
+        kind = type(self).__name__ + (f" {when}" if when else "")
+        return [f"{type(self).__name__} {self.name!r}: body {body.name!r}'s solver {getattr(cls, '__name__', cls)} cannot {doing} "
+                f"(it lacks {', '.join(lacks)}); interactions of kind {kind} need a solver that implements "
+                f"mlsgalerkin.dynamics.{capability.__name__}"]
 
     @abstractmethod
     def exchange(self, t: float, first: Solver, second: Solver) -> None:
@@ -225,6 +261,58 @@ class Interaction(ABC):
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
         """Restore what :meth:`state_dict` returned (before the first step after a restart)."""
+
+
+def solver_class_of(body: Body) -> type[Solver]:
+    """The :class:`Solver` class that advances ``body`` (its ``solver`` attribute: a class, or
+    ``"package.module:Class"``, imported here)."""
+    spec = body.solver
+    if isinstance(spec, str):
+        module, _, name = spec.partition(":")
+        return getattr(importlib.import_module(module), name)
+    return spec
+
+
+# --------------------------------------------------------------------------------------
+# what an interaction may need from a solver beyond Solver: optional protocols
+# --------------------------------------------------------------------------------------
+
+
+@runtime_checkable
+class DrivesWalls(Protocol):
+    """A solver whose wall particles another body moves, and which reports the force on them:
+    what :class:`~mlsgalerkin.interactions.StructureCoupling` with ``walls=`` needs from the
+    fluid's solver (:class:`~mlsgalerkin.fluid.solver.FluidSolver` implements it)."""
+
+    def drive_walls(self, body: str, t: float, positions: NDArray[np.float64], velocities: NDArray[np.float64],
+                    accelerations: NDArray[np.float64], normals: NDArray[np.float64]) -> None:
+        """Set the wall particles of wall body ``body`` to their state at time ``t`` (s):
+        positions (m), velocities (m/s), accelerations (m/s²) and unit normals into the fluid,
+        each ``(n, d)`` over the body's particles in order."""
+        ...
+
+    def wall_reactions(self, body: str) -> NDArray[np.float64]:
+        """The force the last evaluation put on the wall particles of ``body``, ``(n, d)`` (N,
+        per unit depth in 2D)."""
+        ...
+
+
+@runtime_checkable
+class CarriesStepEndLoad(Protocol):
+    """A solver that can hand out the surface load one of its bodies received during a step
+    and advance the body again with a given load at the step's end: the structure's half of a
+    partitioned, iterated coupling (:class:`~mlsgalerkin.interactions.StructureCoupling` with
+    ``iterations > 1``; :class:`~mlsgalerkin.structure.solver.StructureSolver` implements it)."""
+
+    def step_end_load(self, body: str) -> Any:
+        """The surface load ``body`` received since the last clear, in a form only this solver
+        reads (handed back unchanged to :meth:`set_step_end_load`)."""
+        ...
+
+    def set_step_end_load(self, body: str, load: Any) -> None:
+        """Advance ``body`` in the next step with ``load`` (from :meth:`step_end_load`) at the
+        step's end."""
+        ...
 
 
 # --------------------------------------------------------------------------------------

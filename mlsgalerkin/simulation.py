@@ -180,6 +180,8 @@ class Simulation:
                                 "call (observables(), health(limits), frame()): see mlsgalerkin.dynamics.SystemState")
             self.solvers.append(solver)
             self._solver_of.update({b.name: solver for b in bodies})
+        for i in scene.interactions:
+            i.setup(scene)
         self.state = RunState(t=0.0, step=0, dt=0.0, systems={s.key: s.state for s in self.solvers},
                               interactions=tuple(scene.interactions), _snapshot=self.snapshot)
         self.started = False

@@ -60,6 +60,55 @@ def test_a_wall_that_follows_a_structure_needs_its_coupling():
         Simulation(scene)
 
 
+def test_validating_a_coupling_changes_nothing_and_setup_takes_what_the_run_needs():
+    """``problems()`` is validation only: the coupling's attributes are the same after it
+    (it used to resize the reaction records and take the wall body's anchors); the
+    ``Simulation`` calls ``setup(scene)`` for that."""
+    import copy
+
+    mod = load_problem("hydrostatic_plate")
+    scene = mod.make_scene(mod.Parameters(dx=0.1, t_end=0.01, elements=10))
+    coupling = scene.interactions[0]
+    before = copy.deepcopy(vars(coupling))
+    assert scene.problems() == []
+    after = vars(coupling)
+    assert before.keys() == after.keys()
+    for k, v in before.items():
+        assert repr(v) == repr(after[k]), k
+    assert coupling._anchors is None and coupling.reaction.shape == (2,)
+    Simulation(scene)
+    walls = next(b for b in scene.bodies if b.name == coupling.walls)
+    np.testing.assert_array_equal(coupling._anchors, walls.anchors)
+
+
+def test_a_coupling_names_the_solver_method_it_needs(monkeypatch):
+    """The extra methods a coupling calls on the solvers are declared (``DrivesWalls``,
+    ``CarriesStepEndLoad``) and checked before any work, with the body, the solver, what it lacks
+    and the kind of interaction that needs it."""
+    from mlsgalerkin.dynamics import CarriesStepEndLoad, DrivesWalls
+    from mlsgalerkin.fluid.solver import FluidSolver
+    from mlsgalerkin.structure.solver import StructureSolver
+
+    assert issubclass(FluidSolver, DrivesWalls) and issubclass(StructureSolver, CarriesStepEndLoad)
+    assert not issubclass(StructureSolver, DrivesWalls)
+    mod = load_problem("hydrostatic_plate")
+    scene = mod.make_scene(mod.Parameters(dx=0.1, t_end=0.01, elements=10))
+    monkeypatch.delattr(FluidSolver, "wall_reactions")
+    with pytest.raises(SceneError, match=r"StructureCoupling 'coupling': body 'water''s solver FluidSolver "
+                                         r"cannot drive wall particles riding on a structure \(it lacks wall_reactions\); "
+                                         r"interactions of kind StructureCoupling with walls= need a solver that "
+                                         r"implements mlsgalerkin.dynamics.DrivesWalls"):
+        Simulation(scene)
+    monkeypatch.undo()
+    scene.interactions[0].iterations = 3
+    Simulation(scene)   # the structure solver carries the step-end load
+    monkeypatch.delattr(StructureSolver, "set_step_end_load")
+    with pytest.raises(SceneError, match=r"body 'plate''s solver StructureSolver cannot repeat a step with the load at "
+                                         r"the step's end \(it lacks set_step_end_load\); interactions of kind "
+                                         r"StructureCoupling with iterations > 1 need"):
+        Simulation(scene)
+
+
 @pytest.fixture(scope="module")
 def plate_run():
     mod = load_problem("hydrostatic_plate")

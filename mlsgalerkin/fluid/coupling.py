@@ -55,7 +55,7 @@ from numpy.typing import NDArray
 from mlsgalerkin.contact import PenaltyContact
 from mlsgalerkin.contact.penalty import DEFAULT_ALPHA, DEFAULT_DAMPING, DEFAULT_FEATURE_ANGLE
 from mlsgalerkin.contact.surface import SurfacePoints, TrianglePoints
-from mlsgalerkin.dynamics import Interaction, Solver, Surface
+from mlsgalerkin.dynamics import CarriesStepEndLoad, DrivesWalls, Interaction, Solver, Surface
 from mlsgalerkin.fluid.bodies import FluidBody, WallBody
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -163,11 +163,15 @@ class StructureCoupling(Interaction):
         owner = f"StructureCoupling {self.name!r}"
         out = super().problems(scene)
         bodies = {b.name: b for b in scene.bodies}
-        if scene.dim in (2, 3) and self.reaction.shape != (scene.dim,) and not np.any(self.reaction):
-            self.reaction, self.contact_force = np.zeros(scene.dim), np.zeros(scene.dim)
         if self.first in bodies and not isinstance(bodies[self.first], FluidBody):
             out.append(f"{owner}: {self.first!r} must be a FluidBody (the slave side), got "
                        f"{type(bodies[self.first]).__name__}")
+        if self.walls is not None and self.first in bodies:
+            out += self.capability_problems(bodies[self.first], DrivesWalls, "drive wall particles riding on a "
+                                            "structure", "with walls=")
+        if self.iterates and self.second in bodies:
+            out += self.capability_problems(bodies[self.second], CarriesStepEndLoad, "repeat a step with the load "
+                                            "at the step's end", "with iterations > 1")
         if self.walls is not None:
             w = bodies.get(self.walls)
             if not isinstance(w, WallBody):
@@ -179,9 +183,6 @@ class StructureCoupling(Interaction):
                     isinstance(w.footprints, TrianglePoints) and w.dim != 3):
                 out.append(f"{owner}: the wall body {self.walls!r} is {w.dim}D but its footprints are those of a "
                            f"{5 - w.dim}D surface; build it with WallBody.on_surface(...) on the structure's surface")
-            else:
-                self._anchors = np.asarray(w.anchors, dtype=float)
-                self._footprints = w.footprints
         out += [p.replace("PenaltyContact", owner + ": contact", 1) for p in self.contact.problems(scene)
                 if "no body named" not in p]
         if not (isinstance(self.wall_acceleration, (int, float)) and 0.0 <= self.wall_acceleration <= 1.0):
@@ -198,6 +199,17 @@ class StructureCoupling(Interaction):
             out.append(f"{owner}: the partitioned iteration relaxes the wall particles riding on the structure; "
                        "give walls=")
         return out
+
+    def setup(self, scene: Scene) -> None:
+        """The riding wall particles' anchors and footprints (from the wall body), and the
+        reaction records in the scene's dimension."""
+        if scene.dim in (2, 3) and self.reaction.shape != (scene.dim,) and not np.any(self.reaction):
+            self.reaction, self.contact_force = np.zeros(scene.dim), np.zeros(scene.dim)
+        if self.walls is not None:
+            w = next(b for b in scene.bodies if b.name == self.walls)
+            self._anchors = np.asarray(w.anchors, dtype=float)
+            self._footprints = w.footprints
+        self.contact.setup(scene)
 
     # ------------------------------------------------------------------ per step
     def exchange(self, t: float, first: Solver, second: Solver) -> None:
