@@ -21,7 +21,6 @@ from mlsgalerkin.contact import (
     DEFAULT_ALPHA,
     STABILITY_FACTOR,
     ContactSurface,
-    PenaltyContact,
     candidate_pairs,
     candidate_pairs_reference,
     closest_points,
@@ -36,6 +35,7 @@ from mlsgalerkin.contact import (
 )
 from mlsgalerkin.contact.geometry import EDGE, INTERIOR, VERTEX
 from mlsgalerkin.dynamics import Solver, Surface
+from mlsgalerkin.interactions import PenaltyContact
 
 G = 9.81
 DT = 1e-4       # reference time step (s)
@@ -738,3 +738,34 @@ def test_the_kernel_refuses_inconsistent_arrays(call, fragment):
     with pytest.raises(ValueError) as info:
         call(floor(2))
     assert fragment in str(info.value)
+
+
+def test_the_old_import_paths_of_the_interactions_work_for_a_release_and_name_the_new_one():
+    """``PenaltyContact`` and ``StructureCoupling`` moved to :mod:`mlsgalerkin.interactions`; the
+    old names and module paths give the same classes with a ``DeprecationWarning`` that names
+    the new import (checked in a fresh interpreter: each old name warns once per process)."""
+    import subprocess
+    import sys
+
+    code = """
+import warnings
+warnings.simplefilter("always")
+with warnings.catch_warnings(record=True) as caught:
+    import mlsgalerkin.contact, mlsgalerkin.fluid
+    assert not caught, [str(w.message) for w in caught]   # importing the old packages is silent
+    from mlsgalerkin.interactions import PenaltyContact, StructureCoupling, riding_kinematics
+    from mlsgalerkin.contact import PenaltyContact as a
+    from mlsgalerkin.contact.interaction import PenaltyContact as b
+    from mlsgalerkin.fluid import StructureCoupling as c
+    from mlsgalerkin.fluid.coupling import StructureCoupling as d, riding_kinematics as e
+assert a is b is PenaltyContact and c is d is StructureCoupling and e is riding_kinematics
+for w in caught:
+    assert issubclass(w.category, DeprecationWarning) and "from mlsgalerkin.interactions import" in str(w.message)
+print(sorted({str(w.message).split(" has moved")[0] for w in caught}))
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == str(sorted([
+        "mlsgalerkin.contact.PenaltyContact", "mlsgalerkin.contact.interaction.PenaltyContact",
+        "mlsgalerkin.fluid.StructureCoupling", "mlsgalerkin.fluid.coupling.StructureCoupling",
+        "mlsgalerkin.fluid.coupling.riding_kinematics"]))

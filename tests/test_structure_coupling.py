@@ -1,4 +1,4 @@
-"""The fluid loads a structure (:mod:`mlsgalerkin.fluid.coupling`): wall particles riding on a
+"""The fluid loads a structure (:mod:`mlsgalerkin.interactions.structure_coupling`): wall particles riding on a
 surface, their reaction spread back to its nodes, and the plate under a water column of
 ``hydrostatic_plate`` at a coarse resolution."""
 
@@ -11,7 +11,7 @@ from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.contact.surface import surface_points
 from mlsgalerkin.dynamics import Surface
 from mlsgalerkin.fluid import WallBody
-from mlsgalerkin.fluid.coupling import riding_kinematics
+from mlsgalerkin.interactions import riding_kinematics
 from mlsgalerkin.problem import load_problem
 from mlsgalerkin.scene import SceneError
 from mlsgalerkin.simulation import Simulation
@@ -146,7 +146,7 @@ def test_aitken_relaxation_finds_the_fixed_point_of_a_linear_interface_map():
     optimal ``1/(1 − a)`` clipped to (0, 1] (``AITKEN_RANGE``), and the relaxed guess converges to
     the fixed point: in one relaxed pass for an expanding map (``a = −3``, where plain iteration
     diverges), at the plain rate 0.5 when the optimum 2 is clipped to 1."""
-    from mlsgalerkin.fluid import StructureCoupling
+    from mlsgalerkin.interactions import StructureCoupling
 
     for a in (0.5, -3.0):
         c = StructureCoupling("water", "plate", walls="w", iterations=50, relaxation=0.5)

@@ -28,7 +28,7 @@ fluid body in two ways, both momentum-conserving, both every step, in 2D and in 
    lost) — goes to the surface nodes after the fluid's force evaluation (:meth:`after_step`) by
    the transpose of the same map, :math:`\mathbf f_a = \sum_w W_{p(w)a}\,\mathbf f_w`.
 2. **Node-to-surface penalty contact** of the fluid particles (slaves) on the structure's
-   surface (master) — :class:`~mlsgalerkin.contact.PenaltyContact`: no particle passes
+   surface (master) — :class:`~mlsgalerkin.interactions.PenaltyContact`: no particle passes
    through the structure, and the contact reactions go to the structure's surface nodes.
 
 The coupling is explicit and staggered (the structure advances with the loads of the last step,
@@ -52,11 +52,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mlsgalerkin.contact import PenaltyContact
 from mlsgalerkin.contact.penalty import DEFAULT_ALPHA, DEFAULT_DAMPING, DEFAULT_FEATURE_ANGLE
 from mlsgalerkin.contact.surface import SurfacePoints, TrianglePoints
 from mlsgalerkin.dynamics import CarriesStepEndLoad, DrivesWalls, Interaction, Solver, Surface
 from mlsgalerkin.fluid.bodies import FluidBody, WallBody
+from mlsgalerkin.interactions.penalty_contact import PenaltyContact
 
 if TYPE_CHECKING:  # pragma: no cover
     from mlsgalerkin.scene import Scene
@@ -96,7 +96,7 @@ class StructureCoupling(Interaction):
         structure is a penalty surface only (the fluid's pressure next to it is then wrong
         wherever the fluid rests on it: ``docs/theory/contact.md``).
     thickness, reach, alpha, damping, dt_ref, feature_angle
-        The penalty contact's parameters (:class:`~mlsgalerkin.contact.PenaltyContact`):
+        The penalty contact's parameters (:class:`~mlsgalerkin.interactions.PenaltyContact`):
         thickness ``g0`` (m, half the particle spacing), reach (m, default ``2 g0``), stiffness
         factor, damping ratio, reference step (s), feature angle (degrees).
     wall_acceleration : float
