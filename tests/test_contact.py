@@ -19,8 +19,10 @@ from hypothesis import strategies as st
 
 from mlsgalerkin.contact import (
     DEFAULT_ALPHA,
+    DEFAULT_DAMPING,
     STABILITY_FACTOR,
     ContactSurface,
+    PenaltyLaw,
     candidate_pairs,
     candidate_pairs_reference,
     closest_points,
@@ -769,3 +771,43 @@ print(sorted({str(w.message).split(" has moved")[0] for w in caught}))
         "mlsgalerkin.contact.PenaltyContact", "mlsgalerkin.contact.interaction.PenaltyContact",
         "mlsgalerkin.fluid.StructureCoupling", "mlsgalerkin.fluid.coupling.StructureCoupling",
         "mlsgalerkin.fluid.coupling.riding_kinematics"]))
+
+
+def test_the_penalty_kernel_is_called_from_one_place():
+    """Penalty contact between bodies and the fluid's penalty walls share one wrapper of the
+    kernel (``contact.law.PenaltyLaw``: the parameters, the reference step fixed once, the
+    stored energy summed): no other module of the package calls ``penalty_forces``."""
+    import ast
+    from pathlib import Path
+
+    import mlsgalerkin
+    from mlsgalerkin.contact.law import PenaltyLaw
+    from mlsgalerkin.fluid import PenaltyWalls
+
+    root = Path(mlsgalerkin.__file__).parent
+    callers = set()
+    for path in root.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", None)) == "penalty_forces":
+                callers.add(path.relative_to(root).as_posix())
+    assert callers == {"contact/law.py"}, callers
+    assert isinstance(PenaltyContact("water", "plate", thickness=0.005).law, PenaltyLaw)
+    assert PenaltyWalls().law is None  # its lengths need the fluid's spacing: made at set-up
+
+
+def test_a_penalty_law_fixes_its_reference_step_once_and_sums_the_energy_of_an_evaluation():
+    floor = ContactSurface.polyline([(1.0, 0.0), (-1.0, 0.0)])
+    law = PenaltyLaw(thickness=0.005, reach=0.01)
+    assert law.time_step_limit(2) == math.inf
+    with pytest.raises(ValueError, match="no step: inf"):
+        law.fix_reference_step(lambda: math.inf, lambda dt: f"no step: {dt}")
+    assert law.fix_reference_step(lambda: 1e-4, str) == 1e-4
+    assert law.fix_reference_step(lambda: 5e-5, str) == 1e-4   # fixed once
+    x = np.array([[0.0, 0.004], [0.5, 0.003]])
+    law.begin()
+    one = law.forces(x[:1], np.zeros((1, 2)), 0.1, floor.nodes, None, None, floor.facets)
+    two = law.forces(x[1:], np.zeros((1, 2)), 0.1, floor.nodes, None, None, floor.facets)
+    assert law.energy == one.stored_energy + two.stored_energy > 0
+    law.begin()
+    assert law.energy == 0.0
+    assert law.time_step_limit(2) == rigid_time_step(DEFAULT_ALPHA, DEFAULT_DAMPING, 1e-4, 2)

@@ -4,10 +4,10 @@ The *slave* body exposes its nodes (a :class:`~mlsgalerkin.dynamics.Surface` wit
 segments: the particles of a fluid body), the *master* body a surface with segments (2D) or
 triangles (3D) — a structure's boundary. Once per step, between the solvers'
 ``begin_step`` and ``end_step``, :meth:`PenaltyContact.exchange` reads both surfaces at
-``t + Δt``, computes the penalty forces (:func:`~mlsgalerkin.contact.penalty.penalty_forces`)
-and adds them to the slave nodes and, equal and opposite, to the master nodes
-(``add_surface_forces``). A master whose ``Surface.masses`` is ``None`` is rigid
-(``m* = m_s``).
+``t + Δt``, computes the penalty forces with its :class:`~mlsgalerkin.contact.law.PenaltyLaw`
+(:func:`~mlsgalerkin.contact.penalty.penalty_forces`) and adds them to the slave nodes and,
+equal and opposite, to the master nodes (``add_surface_forces``). A master whose
+``Surface.masses`` is ``None`` is rigid (``m* = m_s``).
 
 **Reference time step.** The stiffness is ``k = α m*/Δt_ref²``. ``dt_ref`` may be given; by
 default it is fixed at the first exchange as the smaller of the two solvers' stable steps
@@ -30,14 +30,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mlsgalerkin.contact.penalty import (
-    DEFAULT_ALPHA,
-    DEFAULT_DAMPING,
-    DEFAULT_FEATURE_ANGLE,
-    check_penalty_parameters,
-    penalty_forces,
-    rigid_time_step,
-)
+from mlsgalerkin.contact.law import PenaltyLaw
+from mlsgalerkin.contact.penalty import DEFAULT_ALPHA, DEFAULT_DAMPING, DEFAULT_FEATURE_ANGLE, check_penalty_parameters
 from mlsgalerkin.dynamics import Interaction, Solver
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -78,14 +72,13 @@ class PenaltyContact(Interaction):
                  feature_angle: float = DEFAULT_FEATURE_ANGLE, moment_about: ArrayLike | None = None,
                  name: str = "contact") -> None:
         self.first, self.second, self.name = slave, master, name
-        self.thickness = thickness
         if reach is None and isinstance(thickness, (int, float)) and thickness > 0:
             reach = 2.0 * thickness  # nodes without a thickness have no natural reach: asked for
-        self.reach = reach
-        self.alpha, self.damping, self.feature_angle = alpha, damping, feature_angle
+        #: The contact law: parameters, the reference step once fixed, the stored energy.
+        self.law = PenaltyLaw(thickness=thickness, reach=reach, alpha=alpha, damping=damping,
+                              feature_angle=feature_angle, dt_ref=dt_ref)
         self.dt_ref = dt_ref
         self.moment_about = None if moment_about is None else np.asarray(moment_about, dtype=float)
-        self._dt_ref: float | None = dt_ref
         self._rigid: bool | None = None
         self._dim: int | None = None
         self._last_stable = math.inf
@@ -95,7 +88,18 @@ class PenaltyContact(Interaction):
         self.max_penetration = 0.0
         self.max_active = 0
         self.last: dict[str, Any] = {}
-        self.energy = 0.0  # elastic energy of the contact springs at the last exchange (J, per m in 2D)
+
+    # the parameters, as the law holds them (read-only: give them to the constructor)
+    thickness = property(lambda self: self.law.thickness, doc="Contact thickness ``g0`` (m).")
+    reach = property(lambda self: self.law.reach, doc="Reach behind ``g0`` (m).")
+    alpha = property(lambda self: self.law.alpha, doc="Stiffness factor (–).")
+    damping = property(lambda self: self.law.damping, doc="Damping ratio (–).")
+    feature_angle = property(lambda self: self.law.feature_angle, doc="Feature angle (degrees).")
+
+    @property
+    def energy(self) -> float:
+        """Elastic energy of the contact springs at the last exchange (J, per m in 2D)."""
+        return self.law.energy
 
     @property
     def slave(self) -> str:
@@ -135,19 +139,15 @@ class PenaltyContact(Interaction):
                              "be a body with a surface (its solver's surface() must return segments)")
         if sl.masses is None:
             raise ValueError(f"{owner}: the slave body {self.first!r} gives no nodal masses; the stiffness needs them")
-        if self._dt_ref is None:
-            dt = min(first.stable_time_step(), second.stable_time_step())
-            if not (math.isfinite(dt) and dt > 0):
-                raise ValueError(f"{owner}: no reference time step (the solvers of {self.first!r} and {self.second!r} "
-                                 f"report {dt!r}); give dt_ref=")
-            self._dt_ref = float(dt)
+        self.law.fix_reference_step(
+            lambda: min(first.stable_time_step(), second.stable_time_step()),
+            lambda dt: f"{owner}: no reference time step (the solvers of {self.first!r} and {self.second!r} report "
+                       f"{dt!r}); give dt_ref=")
         d = sl.positions.shape[1]
         self._dim, self._rigid = d, ms.masses is None
-        res = penalty_forces(
-            sl.positions, sl.velocities, sl.masses, ms.positions, ms.velocities, ms.masses, ms.segments,
-            dt_ref=self._dt_ref, thickness=self.thickness, reach=self.reach, alpha=self.alpha, damping=self.damping,
-            feature_angle=self.feature_angle, centre=self.moment_about,
-        )
+        self.law.begin()
+        res = self.law.forces(sl.positions, sl.velocities, sl.masses, ms.positions, ms.velocities, ms.masses,
+                              ms.segments, centre=self.moment_about)
         first.add_surface_forces(self.first, res.slave_forces)
         second.add_surface_forces(self.second, res.master_forces)
         self.exchanges += 1
@@ -157,7 +157,6 @@ class PenaltyContact(Interaction):
             self.peak_force, self.time_of_peak_force = force, float(t)
         self.max_penetration = max(self.max_penetration, res.max_penetration)
         self.max_active = max(self.max_active, res.contacts)
-        self.energy = res.stored_energy
         moment = res.moment if d == 2 else np.asarray(res.moment).tolist()
         self.last = {"t": float(t), "force": res.total_force.tolist(), "moment": moment, "contacts": res.contacts,
                      "max_penetration": res.max_penetration}
@@ -165,10 +164,10 @@ class PenaltyContact(Interaction):
     def stable_time_step(self) -> float:
         """Constant bound for a slave with up to ``d`` contacts, and the bound of the master nodes
         touched at the last exchange (s); ``inf`` before the first exchange."""
-        if self._dt_ref is None or self._dim is None:
+        if self.law.dt_ref is None or self._dim is None:
             return math.inf
         kappa = 1 if self._rigid else 2
-        return min(rigid_time_step(self.alpha, self.damping, self._dt_ref, kappa * self._dim), self._last_stable)
+        return min(self.law.time_step_limit(kappa * self._dim), self._last_stable)
 
     # ------------------------------------------------------------------ restart and report
     def observables(self) -> dict[str, float]:
@@ -177,23 +176,23 @@ class PenaltyContact(Interaction):
         return {f"{self.name}_energy": self.energy}
 
     def state_dict(self) -> dict[str, Any]:
-        return {"dt_ref": self._dt_ref, "rigid": self._rigid, "dim": self._dim, "energy": self.energy,
+        return {"dt_ref": self.law.dt_ref, "rigid": self._rigid, "dim": self._dim, "energy": self.energy,
                 "last_stable_dt": None if math.isinf(self._last_stable) else self._last_stable,
                 "exchanges": self.exchanges, "peak_force": self.peak_force, "time_of_peak_force": self.time_of_peak_force,
                 "max_penetration": self.max_penetration, "max_active": self.max_active, "last": self.last}
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
-        self._dt_ref, self._rigid, self._dim = d["dt_ref"], d["rigid"], d["dim"]
+        self.law.dt_ref, self._rigid, self._dim = d["dt_ref"], d["rigid"], d["dim"]
         self._last_stable = math.inf if d["last_stable_dt"] is None else float(d["last_stable_dt"])
         self.exchanges, self.peak_force = int(d["exchanges"]), float(d["peak_force"])
         self.time_of_peak_force, self.max_penetration = d["time_of_peak_force"], float(d["max_penetration"])
         self.max_active, self.last = int(d["max_active"]), dict(d["last"])
-        self.energy = float(d.get("energy", 0.0))   # checkpoints written before the column existed
+        self.law.energy = float(d.get("energy", 0.0))   # checkpoints written before the column existed
 
     def summary(self) -> dict[str, Any]:
         return {
             "slave": self.first, "master": self.second, "alpha": self.alpha, "damping": self.damping,
-            "thickness_m": self.thickness, "reach_m": self.reach, "dt_ref_s": self._dt_ref,
+            "thickness_m": self.thickness, "reach_m": self.reach, "dt_ref_s": self.law.dt_ref,
             "master_rigid": self._rigid, "exchanges": self.exchanges,
             "peak_force_N": self.peak_force, "time_of_peak_force_s": self.time_of_peak_force,
             "max_penetration_m": self.max_penetration, "active_contacts_max": self.max_active,
