@@ -20,21 +20,37 @@ the solver that advances them (every :class:`Body` names its solver class), and 
 A body kind that should take part implements a :class:`Body` (data: geometry, material,
 initial state), a :class:`Scheme` (the numerical settings of its solver: the fluid's effects,
 approximation and integrator; a structure's largest step) and a :class:`Solver` (state and how
-it advances, with its own integrator and sub-steps). A solver is built from its bodies, its
-scheme and a :class:`SceneView` (what it may know of the rest of the scene); it never sees the
-scene itself. Nothing in the loop changes. See ``docs/architecture.md``.
+it advances, with its own integrator and sub-steps) whose state is a :class:`SystemState` (what
+monitors see: observables, health as a :class:`Diagnosis`, VTU frames). A solver is built from
+its bodies, its scheme and a :class:`SceneView` (what it may know of the rest of the scene); it
+never sees the scene itself. Nothing in the loop changes. See ``docs/architecture.md``.
 """
 
 from __future__ import annotations
 
+import importlib
 from abc import ABC, abstractmethod
-from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["Body", "Interaction", "SceneView", "Scheme", "Solver", "Surface"]
+__all__ = [
+    "Body",
+    "CarriesStepEndLoad",
+    "Diagnosis",
+    "DrivesWalls",
+    "Interaction",
+    "SceneView",
+    "Scheme",
+    "Solver",
+    "Surface",
+    "SystemState",
+    "import_class",
+    "solver_class_of",
+]
 
 
 class Body:
@@ -169,8 +185,8 @@ class Solver(ABC):
 
     @property
     @abstractmethod
-    def state(self) -> Any:
-        """This solver's state (what monitors and probes see)."""
+    def state(self) -> "SystemState":
+        """This solver's state (what monitors and probes see): a :class:`SystemState`."""
 
     @abstractmethod
     def start(self) -> None:
@@ -227,10 +243,35 @@ class Interaction(ABC):
     second: str
 
     def problems(self, scene: SceneView) -> list[str]:
-        """Every problem with this interaction in ``scene`` (empty if none). Reads only."""
+        """Every problem with this interaction in ``scene`` (empty if none). Validation only:
+        it changes nothing (what the run needs from the scene is taken in :meth:`setup`)."""
         names = {b.name for b in scene.bodies}
         return [f"interaction {self.name!r}: no body named {b!r}" for b in (self.first, self.second)
                 if b not in names]
+
+    def setup(self, scene: SceneView) -> None:
+        """Take what the run needs from the validated ``scene`` (called once when the
+        :class:`~mlsgalerkin.simulation.Simulation` is built, before the first step or a
+        restore)."""
+
+    def capability_problems(self, body: Body, capability: type, doing: str, when: str = "") -> list[str]:
+        """``[]`` if the solver of ``body`` implements the optional protocol ``capability``
+        (:class:`DrivesWalls`, :class:`CarriesStepEndLoad`), else the problem, naming what the
+        solver cannot do (``doing``), the methods it lacks and the kind of interaction (with
+        ``when``, the setting that needs it) that needs them."""
+        try:
+            cls = solver_class_of(body)
+        except (ImportError, AttributeError):
+            return []  # the scene reports a solver that cannot be imported
+        # the methods looked up each time (``issubclass`` on a protocol caches its answers)
+        methods = [n for n, v in vars(capability).items() if not n.startswith("_") and callable(v)]
+        lacks = [n for n in methods if not callable(getattr(cls, n, None))]
+        if not lacks:
+            return []
+        kind = type(self).__name__ + (f" {when}" if when else "")
+        return [f"{type(self).__name__} {self.name!r}: body {body.name!r}'s solver {getattr(cls, '__name__', cls)} cannot {doing} "
+                f"(it lacks {', '.join(lacks)}); interactions of kind {kind} need a solver that implements "
+                f"mlsgalerkin.dynamics.{capability.__name__}"]
 
     @abstractmethod
     def exchange(self, t: float, first: Solver, second: Solver) -> None:
@@ -281,3 +322,227 @@ class Interaction(ABC):
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
         """Restore what :meth:`state_dict` returned (before the first step after a restart)."""
+
+
+def import_class(spec: Any) -> Any:
+    """A class given as itself or as its import path ``"package.module:Class"`` (imported here):
+    how a :class:`Body` or a :class:`Scheme` names its solver without importing it."""
+    if isinstance(spec, str):
+        module, _, name = spec.partition(":")
+        return getattr(importlib.import_module(module), name)
+    return spec
+
+
+def solver_class_of(body: Body) -> type[Solver]:
+    """The :class:`Solver` class that advances ``body`` (its ``solver`` attribute: a class, or
+    ``"package.module:Class"``, imported here)."""
+    return import_class(body.solver)
+
+
+# --------------------------------------------------------------------------------------
+# what an interaction may need from a solver beyond Solver: optional protocols
+# --------------------------------------------------------------------------------------
+
+
+@runtime_checkable
+class DrivesWalls(Protocol):
+    """A solver whose wall particles another body moves, and which reports the force on them:
+    what :class:`~mlsgalerkin.interactions.StructureCoupling` with ``walls=`` needs from the
+    fluid's solver (:class:`~mlsgalerkin.fluid.solver.FluidSolver` implements it)."""
+
+    def drive_walls(self, body: str, t: float, positions: NDArray[np.float64], velocities: NDArray[np.float64],
+                    accelerations: NDArray[np.float64], normals: NDArray[np.float64]) -> None:
+        """Set the wall particles of wall body ``body`` to their state at time ``t`` (s):
+        positions (m), velocities (m/s), accelerations (m/s²) and unit normals into the fluid,
+        each ``(n, d)`` over the body's particles in order."""
+        ...
+
+    def wall_reactions(self, body: str) -> NDArray[np.float64]:
+        """The force the last evaluation put on the wall particles of ``body``, ``(n, d)`` (N,
+        per unit depth in 2D)."""
+        ...
+
+
+@runtime_checkable
+class CarriesStepEndLoad(Protocol):
+    """A solver that can hand out the surface load one of its bodies received during a step
+    and advance the body again with a given load at the step's end: the structure's half of a
+    partitioned, iterated coupling (:class:`~mlsgalerkin.interactions.StructureCoupling` with
+    ``iterations > 1``; :class:`~mlsgalerkin.structure.solver.StructureSolver` implements it)."""
+
+    def step_end_load(self, body: str) -> Any:
+        """The surface load ``body`` received since the last clear, in a form only this solver
+        reads (handed back unchanged to :meth:`set_step_end_load`)."""
+        ...
+
+    def set_step_end_load(self, body: str, load: Any) -> None:
+        """Advance ``body`` in the next step with ``load`` (from :meth:`step_end_load`) at the
+        step's end."""
+        ...
+
+
+# --------------------------------------------------------------------------------------
+# what monitors see of a solver: its state, and why that state is unsound
+# --------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """Why a system's state is unsound: what :meth:`SystemState.health` returns, the watchdog
+    reports and ``summary.json`` keeps under ``"diagnosis"`` (:meth:`as_dict`).
+
+    A system fills in what it knows; the run loop completes ``system``, ``step`` and ``time``
+    (:meth:`completed`).
+
+    Attributes
+    ----------
+    quantity : str
+        What is wrong: ``"velocity"``, ``"density"``, ``"displacement"``, ...
+    value : tuple of float
+        Its value at the bad point (SI units of the quantity; a vector's components).
+    problem : str
+        What is wrong with it, to follow the quantity's name: ``"is not finite"``,
+        ``"ρ/ρ0 = 2.31 is outside [0.5, 2.0]"``, ``"|u| = 3.2 m exceeds 1 m"``.
+    limit : float or tuple of float, optional
+        The limit it broke (same units; a range as ``(lo, hi)``); ``None`` for a non-finite value.
+    body : str, optional
+        Name of the body the bad point belongs to.
+    point : str, optional
+        What :attr:`index` counts: ``"particle"``, ``"node"``; ``None`` when the whole body is bad.
+    index : int, optional
+        Index of the bad point within its system (a particle) or its body (a node).
+    position : tuple of float, optional
+        Where the point is (m, ``(d,)``): its current position, or with :attr:`at_rest` its
+        position at rest (a structure node, whose current position may not be finite).
+    at_rest : bool
+        Whether :attr:`position` is the rest position.
+    system : str, optional
+        Key of the system in ``RunState.systems`` (``"fluid"``, ``"structure"``).
+    step, time : int and float, optional
+        The step and time (s) at which the state was found unsound.
+    hint : str
+        What to try (one sentence; the watchdog appends it to its message).
+    extras : mapping
+        Further JSON-serialisable facts, kept as keys of :meth:`as_dict` (the fluid's
+        ``neighbours``: the bad particle's neighbour count).
+    """
+
+    quantity: str
+    value: tuple[float, ...]
+    problem: str
+    limit: float | tuple[float, ...] | None = None
+    body: str | None = None
+    point: str | None = None
+    index: int | None = None
+    position: tuple[float, ...] | None = None
+    at_rest: bool = False
+    system: str | None = None
+    step: int | None = None
+    time: float | None = None
+    hint: str = ""
+    extras: Mapping[str, Any] = field(default_factory=dict, hash=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "value", _floats(self.value))
+        if self.position is not None:
+            object.__setattr__(self, "position", _floats(self.position))
+        if isinstance(self.limit, (tuple, list, np.ndarray)):
+            object.__setattr__(self, "limit", _floats(self.limit))
+        if self.index is not None:
+            object.__setattr__(self, "index", int(self.index))
+
+    def completed(self, *, system: str, step: int, time: float) -> "Diagnosis":
+        """This diagnosis with ``system``, ``step`` and ``time`` filled in where it left them out."""
+        return replace(self, system=self.system if self.system is not None else system,
+                       step=self.step if self.step is not None else int(step),
+                       time=self.time if self.time is not None else float(time))
+
+    @property
+    def where(self) -> str:
+        """The bad point in words: ``"particle 7 of body 'water' at [0.1, 0.2]"``."""
+        parts = []
+        if self.point is not None and self.index is not None:
+            parts.append(f"{self.point} {self.index}")
+        if self.body is not None:
+            parts.append(f"of body {self.body!r}" if parts else f"body {self.body!r}")
+        if self.position is not None:
+            at = "at rest at" if self.at_rest else "at"
+            parts.append(f"{at} {np.round(self.position, 6).tolist()}")
+        where = " ".join(parts) or "the state"
+        return f"{self.system} {where}" if self.system else where
+
+    @property
+    def message(self) -> str:
+        """One line for a human: when, where, what, the value and the limit, the extras."""
+        when = f"at step {self.step}" if self.step is not None else "at an unknown step"
+        if self.time is not None:
+            when += f" (t = {self.time:.6g} s)"
+        facts = [f"value {list(self.value)}"]
+        if self.limit is not None:
+            facts.append(f"limit {list(self.limit) if isinstance(self.limit, tuple) else self.limit}")
+        facts += [f"{k} {v}" for k, v in self.extras.items()]
+        return f"{when}: {self.where} — {self.quantity} {self.problem} ({', '.join(facts)})"
+
+    def as_dict(self) -> dict[str, Any]:
+        """The JSON record of ``summary.json``: every attribute, the :attr:`message`, the
+        :attr:`extras` as keys of their own, and the index once more under the name of its
+        point (``"particle": 7``, ``"node": 12``)."""
+        out: dict[str, Any] = {
+            "system": self.system, "body": self.body, "quantity": self.quantity, "value": list(self.value),
+            "problem": self.problem, "limit": list(self.limit) if isinstance(self.limit, tuple) else self.limit,
+            "point": self.point, "index": self.index,
+            "position": None if self.position is None else list(self.position), "at_rest": self.at_rest,
+            "step": self.step, "time": self.time, "message": self.message, "hint": self.hint,
+        }
+        if self.point is not None and self.point not in out:
+            out[self.point] = self.index
+        out.update({k: v for k, v in self.extras.items() if k not in out})
+        return out
+
+    @classmethod
+    def from_mapping(cls, d: Mapping[str, Any]) -> "Diagnosis":
+        """A diagnosis from a plain dict of the keys of :meth:`as_dict` (what a system's
+        ``health`` returned before this record existed); unknown keys go to :attr:`extras`."""
+        known = {"quantity", "value", "problem", "limit", "body", "point", "index", "position", "at_rest", "system",
+                 "step", "time", "hint"}
+        kw: dict[str, Any] = {k: d[k] for k in known if k in d}
+        if "index" not in kw and "particle" in d:
+            kw["point"], kw["index"] = "particle", d["particle"]
+        kw.setdefault("quantity", "state")
+        kw.setdefault("value", ())
+        kw.setdefault("problem", "is unsound")
+        extras = {k: v for k, v in d.items() if k not in known and k not in ("message", kw.get("point"))}
+        return cls(**kw, extras=extras)
+
+
+def _floats(x: Any) -> tuple[float, ...]:
+    return tuple(float(v) for v in np.atleast_1d(np.asarray(x, dtype=float)).ravel())
+
+
+@runtime_checkable
+class SystemState(Protocol):
+    """What the run loop and the monitors call on a solver's state (``RunState.systems[key]``,
+    :attr:`Solver.state`). Monitors never see the solvers, only these.
+
+    Optional members, looked up with ``getattr``: ``frame_name`` (str, the name of the VTU
+    series, default the solver's key), ``frame_cells()`` (the cells on :meth:`frame`'s points: a
+    list of ``(vtk cell type, (n_cells, k) int array)``, or one such pair) and ``n`` (the number
+    of nodes counted in the run's throughput, default 0).
+    """
+
+    def observables(self) -> dict[str, float]:
+        """The built-in time-series columns of this system, ``name -> value`` (SI units; the
+        same names at every step from the first, so the columns of ``timeseries.csv`` stay
+        fixed)."""
+        ...
+
+    def health(self, limits: Any) -> Diagnosis | None:
+        """``None`` if the state is sound, else a :class:`Diagnosis` of its first bad point.
+        ``limits`` is the :class:`~mlsgalerkin.monitors.Watchdog`; a system reads the limits that
+        concern it (``density_ratio``, ``max_speed``, ``max_displacement``), with ``getattr`` and
+        a default for a limit it may not have. Called after every step: cheap when sound."""
+        ...
+
+    def frame(self) -> tuple[NDArray[np.float64], dict[str, NDArray]]:
+        """A VTU frame: points ``(n, d)`` (m) and point data, name -> ``(n,)`` or ``(n, d)`` array."""
+        ...

@@ -18,7 +18,8 @@ The :class:`~mlsgalerkin.simulation.Simulation` builds the standard ones from
 monitor             writes
 ==================  ==============================================================================
 :class:`Watchdog`   nothing while the state is sound; ``checkpoints/last_good.npz`` and a
-                    :class:`SimulationDiverged` naming the particle, quantity and step otherwise
+                    :class:`SimulationDiverged` with the system's :class:`~mlsgalerkin.dynamics.Diagnosis`
+                    (system, body, point, quantity, step) otherwise
 :class:`TimeSeries` ``timeseries.csv``: ``time, dt, step``, each system's observables (and the
                     interactions', e.g. a contact's stored energy), the probes
 :class:`Frames`     ``particles.pvd`` + ``particles_*.vtu`` (one series per system)
@@ -39,6 +40,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
+
+from mlsgalerkin.dynamics import Diagnosis
 
 if TYPE_CHECKING:  # pragma: no cover
     from mlsgalerkin.run_state import RunState
@@ -64,11 +67,15 @@ TIME_TOLERANCE = 1e-12
 
 
 class SimulationDiverged(RuntimeError):
-    """The watchdog stopped a run; ``diagnosis`` says which particle, quantity and step."""
+    """The watchdog stopped a run. ``record`` is the :class:`~mlsgalerkin.dynamics.Diagnosis`
+    (which system, body, point, quantity, step); ``diagnosis`` its JSON form
+    (:meth:`~mlsgalerkin.dynamics.Diagnosis.as_dict`, ``summary.json``'s ``"diagnosis"``);
+    ``checkpoint`` the last good state written, if any."""
 
-    def __init__(self, message: str, diagnosis: dict, checkpoint: Path | None = None) -> None:
+    def __init__(self, message: str, diagnosis: Diagnosis | dict, checkpoint: Path | None = None) -> None:
         super().__init__(message)
-        self.diagnosis = diagnosis
+        self.record = diagnosis if isinstance(diagnosis, Diagnosis) else Diagnosis.from_mapping(diagnosis)
+        self.diagnosis = diagnosis.as_dict() if isinstance(diagnosis, Diagnosis) else dict(diagnosis)
         self.checkpoint = checkpoint
 
 
@@ -179,13 +186,17 @@ class Monitor:
 
 @dataclass
 class Watchdog(Monitor):
-    """Stops a diverging run: non-finite values, ``ρ/ρ0`` outside ``density_ratio``, or a speed
-    above ``max_speed`` (m/s; default ``2 c0``). Keeps the state of every ``keep_every``-th step
-    and writes the last good one to ``checkpoints/last_good.npz`` when it stops the run."""
+    """Stops a diverging run when a system's :meth:`~mlsgalerkin.dynamics.SystemState.health`
+    returns a :class:`~mlsgalerkin.dynamics.Diagnosis`: for the fluid, non-finite values,
+    ``ρ/ρ0`` outside ``density_ratio``, or a speed above ``max_speed`` (m/s; default ``2 c0``);
+    for a structure, a non-finite state or a node displaced more than ``max_displacement`` (m;
+    default: no limit). Keeps the state of every ``keep_every``-th step and writes the last good
+    one to ``checkpoints/last_good.npz`` when it stops the run."""
 
     density_ratio: tuple[float, float] = (0.5, 2.0)
     max_speed: float | None = None
     keep_every: int = 50
+    max_displacement: float | None = None
     name = "watchdog"
 
     def problems(self) -> list[str]:
@@ -193,8 +204,11 @@ class Watchdog(Monitor):
         lo, hi = self.density_ratio
         if not (0 < lo < 1 < hi):
             out.append(f"watchdog.density_ratio must bracket 1, (lo, hi) with 0 < lo < 1 < hi, got {self.density_ratio!r}")
-        if self.max_speed is not None and not self.max_speed > 0:
-            out.append(f"watchdog.max_speed must be positive (m/s) or None, got {self.max_speed!r}")
+        for name in ("max_speed", "max_displacement"):
+            v = getattr(self, name)
+            if v is not None and not (isinstance(v, (int, float)) and v > 0):
+                unit = "m/s" if name == "max_speed" else "m"
+                out.append(f"watchdog.{name} must be positive ({unit}) or None, got {v!r}")
         if not (isinstance(self.keep_every, int) and self.keep_every >= 1):
             out.append(f"watchdog.keep_every must be an integer >= 1, got {self.keep_every!r}")
         return out
@@ -202,12 +216,13 @@ class Watchdog(Monitor):
     def start(self, state: "RunState", info: RunInfo) -> None:
         self._out = info.out
         self._last_good = state.snapshot()
+        self.record: Diagnosis | None = None
         self.diagnosis: dict | None = None
 
     def handle(self, state: "RunState", t: float) -> None:
         diag = state.health(self)
         if diag is not None:
-            self.diagnosis = diag
+            self.record, self.diagnosis = diag, diag.as_dict()
             arrays, meta = self._last_good
             path = None
             if self._out is not None:
@@ -215,18 +230,17 @@ class Watchdog(Monitor):
 
                 (self._out / "checkpoints").mkdir(parents=True, exist_ok=True)
                 path = save_checkpoint(self._out / "checkpoints" / "last_good.npz", arrays, meta)
-            msg = (
-                f"run diverged at step {diag['step']} (t = {diag['time']:.6g} s): particle "
-                f"{diag['particle']} of body {diag['body']!r} at {np.round(diag['position'], 6).tolist()} "
-                f"— {diag['quantity']} {diag['problem']} (value {diag['value']}, {diag['neighbours']} "
-                f"neighbours). Last good state (step {meta['step']}) "
-                + (f"saved to {path}" if path else "kept in memory (no output directory)")
-                + ". Try a smaller time step (the fluid scheme's safety or dt_max), more artificial viscosity, "
-                "or a finer resolution."
-            )
-            raise SimulationDiverged(msg, diag, path)
+            raise SimulationDiverged(self.message(diag, meta["step"], path), diag, path)
         if state.step % self.keep_every == 0:
             self._last_good = state.snapshot()
+
+    @staticmethod
+    def message(diag: Diagnosis, last_good_step: int, path: Path | None) -> str:
+        """What the watchdog says when it stops a run: the diagnosis's one line, where the last
+        good state is, and the system's hint."""
+        kept = f"saved to {path}" if path else "kept in memory (no output directory)"
+        hint = f" {diag.hint}" if diag.hint else ""
+        return f"run diverged {diag.message}. Last good state (step {last_good_step}) {kept}.{hint}"
 
     def summary(self) -> dict[str, Any]:
         return {"diagnosis": self.diagnosis} if getattr(self, "diagnosis", None) else {}

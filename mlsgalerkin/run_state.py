@@ -7,10 +7,13 @@ monitors, probes and solvers can name it without an import circle.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
+
+from mlsgalerkin.dynamics import Diagnosis
 
 __all__ = ["RunState"]
 
@@ -44,12 +47,19 @@ class RunState:
             out["interactions"] = merged
         return out
 
-    def health(self, limits: Any) -> dict | None:
-        """The first system's diagnosis of an unsound state (``None`` if all are sound)."""
-        for s in self.systems.values():
+    def health(self, limits: Any) -> Diagnosis | None:
+        """The first system's :class:`~mlsgalerkin.dynamics.Diagnosis` of an unsound state, with
+        the system's key, the step and the time filled in (``None`` if all are sound)."""
+        for key, s in self.systems.items():
             diag = s.health(limits) if hasattr(s, "health") else None
-            if diag is not None:
-                return diag
+            if diag is None:
+                continue
+            if not isinstance(diag, Diagnosis):
+                warnings.warn(f"the health() of system {key!r} returned a {type(diag).__name__}; return a "
+                              "mlsgalerkin.dynamics.Diagnosis (a plain dict is read for one release)",
+                              DeprecationWarning, stacklevel=2)
+                diag = Diagnosis.from_mapping(diag)
+            return diag.completed(system=key, step=self.step, time=self.t)
         return None
 
     def body(self, name: str) -> Any:

@@ -22,14 +22,13 @@ scene 'scene' has 1 problem:
 
 from __future__ import annotations
 
-import importlib
 import warnings
 from typing import Any, Sequence
 
 import numpy as np
 
 from mlsgalerkin.approximation.settings import Approximation
-from mlsgalerkin.dynamics import Body, Interaction, SceneView, Scheme, Solver
+from mlsgalerkin.dynamics import Body, Interaction, SceneView, Scheme, Solver, import_class, solver_class_of
 from mlsgalerkin.monitors import Monitor, Output, Probe, Watchdog
 
 __all__ = ["MAX_FRAMES", "Approximation", "Output", "Probe", "Scene", "SceneError", "Watchdog", "solver_class"]
@@ -48,18 +47,10 @@ class SceneError(ValueError):
     """A scene cannot run; the message lists every problem found."""
 
 
-def _resolve(spec: Any) -> Any:
-    """A class given as itself or as ``"package.module:Class"``."""
-    if isinstance(spec, str):
-        module, _, name = spec.partition(":")
-        return getattr(importlib.import_module(module), name)
-    return spec
-
-
 def solver_class(body: Body) -> type[Solver]:
     """The :class:`~mlsgalerkin.dynamics.Solver` class that advances ``body`` (its ``solver``
     attribute: a class, or ``"module:Class"``)."""
-    return _resolve(body.solver)
+    return solver_class_of(body)
 
 
 class Scene:
@@ -153,7 +144,7 @@ class Scene:
     def scheme_for(self, solver: type[Solver]) -> Scheme:
         """The listed scheme for ``solver``, or its defaults (``solver.scheme_class()``)."""
         for sc in self.schemes:
-            if isinstance(sc, Scheme) and _resolve(sc.solver) is solver:
+            if isinstance(sc, Scheme) and import_class(sc.solver) is solver:
                 return sc
         return solver.scheme_class()
 
@@ -251,7 +242,7 @@ class Scene:
                            "StructureScheme)")
                 continue
             try:
-                cls = _resolve(sc.solver)
+                cls = import_class(sc.solver)
             except (ImportError, AttributeError) as err:
                 out.append(f"{type(sc).__name__} names a solver that cannot be imported ({err})")
                 continue
@@ -292,13 +283,13 @@ def _legacy_schemes(bodies: list, listed: list, effects: Sequence | None, option
         "t_end=...) — or water(...) for the recommended set — and StructureScheme(dt_max=...) for the structures "
         "(CHANGELOG.md)", DeprecationWarning, stacklevel=3)
     fluid_options = {k: v for k, v in options.items() if v is not None}
-    fluid = _resolve(_LEGACY_FLUID_SCHEME)
-    fluid_solver = _resolve(fluid.solver)
+    fluid = import_class(_LEGACY_FLUID_SCHEME)
+    fluid_solver = import_class(fluid.solver)
     if effects or any(isinstance(b, Body) and solver_class(b) is fluid_solver for b in bodies):
         schemes.insert(0, fluid(list(effects), **fluid_options))
     if options.get("dt_max") is not None:
-        structure = _resolve(_LEGACY_STRUCTURE_SCHEME)
-        target = _resolve(structure.solver)
+        structure = import_class(_LEGACY_STRUCTURE_SCHEME)
+        target = import_class(structure.solver)
         if any(isinstance(b, Body) and solver_class(b) is target for b in bodies):
             schemes.append(structure(dt_max=options["dt_max"]))
     return schemes

@@ -26,14 +26,14 @@ import logging
 import signal
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from mlsgalerkin.dynamics import Solver
+from mlsgalerkin.dynamics import Solver, SystemState
 from mlsgalerkin.monitors import (
     Checkpoints,
     Frames,
@@ -127,8 +127,13 @@ class Simulation:
         view = scene.view()
         for cls, bodies in scene.solver_groups().items():
             solver = cls(bodies, scene.scheme_for(cls), view)
+            if not isinstance(solver.state, SystemState):
+                raise TypeError(f"{cls.__name__}.state is a {type(solver.state).__name__}, which lacks what monitors "
+                                "call (observables(), health(limits), frame()): see mlsgalerkin.dynamics.SystemState")
             self.solvers.append(solver)
             self._solver_of.update({b.name: solver for b in bodies})
+        for i in scene.interactions:
+            i.setup(view)
         self.state = RunState(t=0.0, step=0, dt=0.0, systems={s.key: s.state for s in self.solvers},
                               interactions=tuple(scene.interactions), _snapshot=self.snapshot)
         self.started = False

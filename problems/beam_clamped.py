@@ -7,7 +7,7 @@ Poisson's ratio, not given, 0.3). The surge hits the beam, runs up it and falls 
 continues behind the beam so that water thrown over it lands on a floor. The beam is a
 scikit-fem body (9-node Q2, plane stress so that the 2D body bends as the beam of Euler–Bernoulli
 theory; one element through the thickness), loaded through the wall particles riding on it and
-node-to-surface penalty contact (:class:`~mlsgalerkin.fluid.StructureCoupling`). By default
+node-to-surface penalty contact (:class:`~mlsgalerkin.interactions.StructureCoupling`). By default
 the coupling is explicit and the wall pressure does not see the beam's acceleration: with it
 the explicit coupling diverged at 1.8 s (dx 4 mm); ``iterations=20`` with
 ``wall_acceleration=1`` runs the source's partitioned iteration instead (both are in
@@ -33,13 +33,13 @@ from mlsgalerkin.fluid import (
     SHIFTING_MODES,
     FluidBody,
     Phase,
-    StructureCoupling,
     WallBody,
     hydrostatic_density,
     wall_box,
     water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
+from mlsgalerkin.interactions import StructureCoupling
 from mlsgalerkin.problem import (
     numerical_dissipation,
     require,

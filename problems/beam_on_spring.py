@@ -8,7 +8,7 @@ rotational spring ``K = 1500`` N m/rad; gravity pulls it over (a
 natural period ``2π/sqrt((K − mgL/2)/I) = 0.1879`` s, ``I = m(L² + t²)/12 + m(L/2)²``). The
 surge hits the beam and pushes it over; the water runs up it, falls back, sloshes to the left
 wall and returns. The water loads the beam through the wall particles riding on it and
-node-to-surface penalty contact (:class:`~mlsgalerkin.fluid.StructureCoupling`).
+node-to-surface penalty contact (:class:`~mlsgalerkin.interactions.StructureCoupling`).
 
 Reference (Sun 2016, MPS with 0.01 m particles): two major impacts on the beam, at about
 0.75–2 s and 5.1–5.9 s, each pushing it to large angles; the pressure 0.16 m above the bottom
@@ -39,7 +39,6 @@ from mlsgalerkin.fluid import (
     SHIFTING_MODES,
     FluidBody,
     Phase,
-    StructureCoupling,
     WallBody,
     hydrostatic_density,
     lattice,
@@ -47,6 +46,7 @@ from mlsgalerkin.fluid import (
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.fluid.sensors import pressure_at, sensor_points
+from mlsgalerkin.interactions import StructureCoupling
 from mlsgalerkin.problem import (
     numerical_dissipation,
     require,

@@ -7,7 +7,7 @@ under it and along the floor downstream. The gate is a scikit-fem body (9-node Q
 the gate spans the tank's width; total-Lagrangian neo-Hookean, since the free end turns through
 about 35°; explicit central differences sub-cycled in the fluid's step), loaded through the
 wall particles riding on it and node-to-surface penalty contact
-(:class:`~mlsgalerkin.fluid.StructureCoupling`).
+(:class:`~mlsgalerkin.interactions.StructureCoupling`).
 
 **Elastic constants.** The published values differ by source: ``E = 12`` MPa with ``ν = 0.4``
 (Antoci et al. 2007, from the rubber's tensile test), 10 MPa with ``ν = 0.49`` and 7.8 MPa with
@@ -47,7 +47,6 @@ from mlsgalerkin.fluid import (
     SHIFTING_MODES,
     FluidBody,
     Phase,
-    StructureCoupling,
     WallBody,
     hydrostatic_density,
     lattice,
@@ -55,6 +54,7 @@ from mlsgalerkin.fluid import (
     water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
+from mlsgalerkin.interactions import StructureCoupling
 from mlsgalerkin.problem import (
     numerical_dissipation,
     require,

@@ -10,7 +10,7 @@ plate's flexural rigidity ``D = E h³/(12(1 − ν²))``) gives the mid-span def
 ``−7.06e-5`` m (O'Connor & Rogers quote ``−7.05e-5`` m with the coefficient 0.0026). The plate is a
 scikit-fem body (9-node Q2, plane strain, implicit Newmark: the plate's own stable step is 100
 times below the fluid's); the water loads it through the wall particles riding on its top face
-and node-to-surface penalty contact (:class:`~mlsgalerkin.fluid.StructureCoupling`).
+and node-to-surface penalty contact (:class:`~mlsgalerkin.interactions.StructureCoupling`).
 
 The water starts at hydrostatic rest and the plate flat, so the plate is loaded suddenly and
 swings about its deflected shape. Checked: the mean mid-span deflection over the second half of
@@ -31,12 +31,12 @@ from skfem import MeshQuad
 from mlsgalerkin.fluid import (
     FluidBody,
     Phase,
-    StructureCoupling,
     WallBody,
     hydrostatic_density,
     lattice,
     water,
 )
+from mlsgalerkin.interactions import StructureCoupling
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial

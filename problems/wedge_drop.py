@@ -7,7 +7,7 @@ sides above the knuckles), of mass 241 kg per metre of length, touches the calm 
 weight). The water slows it; the vertical force rises to a peak at about 15 ms as the wetted
 width grows, then falls once the flow separates at the knuckles. The water loads the wedge
 through the wall particles riding on it and node-to-surface penalty contact
-(:class:`~mlsgalerkin.fluid.StructureCoupling`); the wall pressure sees the wedge's
+(:class:`~mlsgalerkin.interactions.StructureCoupling`); the wall pressure sees the wedge's
 acceleration (the wedge is 40 times heavier than the water layer its wall particles stand for).
 
 Reference: the drop test of Zhao et al. (1996) (shipped as
@@ -41,13 +41,13 @@ from mlsgalerkin.fluid import (
     SHIFTING_MODES,
     FluidBody,
     Phase,
-    StructureCoupling,
     WallBody,
     hydrostatic_density,
     wall_box,
     water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
+from mlsgalerkin.interactions import StructureCoupling
 from mlsgalerkin.problem import (
     numerical_dissipation,
     require,

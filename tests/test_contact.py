@@ -19,9 +19,10 @@ from hypothesis import strategies as st
 
 from mlsgalerkin.contact import (
     DEFAULT_ALPHA,
+    DEFAULT_DAMPING,
     STABILITY_FACTOR,
     ContactSurface,
-    PenaltyContact,
+    PenaltyLaw,
     candidate_pairs,
     candidate_pairs_reference,
     closest_points,
@@ -36,6 +37,7 @@ from mlsgalerkin.contact import (
 )
 from mlsgalerkin.contact.geometry import EDGE, INTERIOR, VERTEX
 from mlsgalerkin.dynamics import Solver, Surface
+from mlsgalerkin.interactions import PenaltyContact
 
 G = 9.81
 DT = 1e-4       # reference time step (s)
@@ -738,3 +740,74 @@ def test_the_kernel_refuses_inconsistent_arrays(call, fragment):
     with pytest.raises(ValueError) as info:
         call(floor(2))
     assert fragment in str(info.value)
+
+
+def test_the_old_import_paths_of_the_interactions_work_for_a_release_and_name_the_new_one():
+    """``PenaltyContact`` and ``StructureCoupling`` moved to :mod:`mlsgalerkin.interactions`; the
+    old names and module paths give the same classes with a ``DeprecationWarning`` that names
+    the new import (checked in a fresh interpreter: each old name warns once per process)."""
+    import subprocess
+    import sys
+
+    code = """
+import warnings
+warnings.simplefilter("always")
+with warnings.catch_warnings(record=True) as caught:
+    import mlsgalerkin.contact, mlsgalerkin.fluid
+    assert not caught, [str(w.message) for w in caught]   # importing the old packages is silent
+    from mlsgalerkin.interactions import PenaltyContact, StructureCoupling, riding_kinematics
+    from mlsgalerkin.contact import PenaltyContact as a
+    from mlsgalerkin.contact.interaction import PenaltyContact as b
+    from mlsgalerkin.fluid import StructureCoupling as c
+    from mlsgalerkin.fluid.coupling import StructureCoupling as d, riding_kinematics as e
+assert a is b is PenaltyContact and c is d is StructureCoupling and e is riding_kinematics
+for w in caught:
+    assert issubclass(w.category, DeprecationWarning) and "from mlsgalerkin.interactions import" in str(w.message)
+print(sorted({str(w.message).split(" has moved")[0] for w in caught}))
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == str(sorted([
+        "mlsgalerkin.contact.PenaltyContact", "mlsgalerkin.contact.interaction.PenaltyContact",
+        "mlsgalerkin.fluid.StructureCoupling", "mlsgalerkin.fluid.coupling.StructureCoupling",
+        "mlsgalerkin.fluid.coupling.riding_kinematics"]))
+
+
+def test_the_penalty_kernel_is_called_from_one_place():
+    """Penalty contact between bodies and the fluid's penalty walls share one wrapper of the
+    kernel (``contact.law.PenaltyLaw``: the parameters, the reference step fixed once, the
+    stored energy summed): no other module of the package calls ``penalty_forces``."""
+    import ast
+    from pathlib import Path
+
+    import mlsgalerkin
+    from mlsgalerkin.contact.law import PenaltyLaw
+    from mlsgalerkin.fluid import PenaltyWalls
+
+    root = Path(mlsgalerkin.__file__).parent
+    callers = set()
+    for path in root.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", None)) == "penalty_forces":
+                callers.add(path.relative_to(root).as_posix())
+    assert callers == {"contact/law.py"}, callers
+    assert isinstance(PenaltyContact("water", "plate", thickness=0.005).law, PenaltyLaw)
+    assert PenaltyWalls().law is None  # its lengths need the fluid's spacing: made at set-up
+
+
+def test_a_penalty_law_fixes_its_reference_step_once_and_sums_the_energy_of_an_evaluation():
+    floor = ContactSurface.polyline([(1.0, 0.0), (-1.0, 0.0)])
+    law = PenaltyLaw(thickness=0.005, reach=0.01)
+    assert law.time_step_limit(2) == math.inf
+    with pytest.raises(ValueError, match="no step: inf"):
+        law.fix_reference_step(lambda: math.inf, lambda dt: f"no step: {dt}")
+    assert law.fix_reference_step(lambda: 1e-4, str) == 1e-4
+    assert law.fix_reference_step(lambda: 5e-5, str) == 1e-4   # fixed once
+    x = np.array([[0.0, 0.004], [0.5, 0.003]])
+    law.begin()
+    one = law.forces(x[:1], np.zeros((1, 2)), 0.1, floor.nodes, None, None, floor.facets)
+    two = law.forces(x[1:], np.zeros((1, 2)), 0.1, floor.nodes, None, None, floor.facets)
+    assert law.energy == one.stored_energy + two.stored_energy > 0
+    law.begin()
+    assert law.energy == 0.0
+    assert law.time_step_limit(2) == rigid_time_step(DEFAULT_ALPHA, DEFAULT_DAMPING, 1e-4, 2)

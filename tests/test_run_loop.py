@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 import numpy as np
 import pytest
 
-from mlsgalerkin.dynamics import Body, Interaction, Solver, Surface
+from mlsgalerkin.dynamics import Body, Diagnosis, Interaction, Solver, Surface, SystemState
 from mlsgalerkin.fluid import FluidBody, MonaghanViscosity, Phase, TaitPressure
 from mlsgalerkin.fluid.scheme import FluidScheme
 from mlsgalerkin.monitors import Monitor
@@ -55,8 +55,12 @@ class PointMassState:
     def frame(self):
         return self.x, {"velocity": self.v}
 
-    def health(self, limits) -> dict | None:
-        return None if np.all(np.isfinite(self.x)) else {"quantity": "position", "step": -1}
+    def health(self, limits) -> Diagnosis | None:
+        bad = np.flatnonzero(~np.isfinite(self.x).all(axis=1))
+        if not bad.size:
+            return None
+        k = int(bad[0])
+        return Diagnosis(quantity="position", value=self.x[k], problem="is not finite", point="mass", index=k)
 
 
 class PointMassSolver(Solver):
@@ -270,3 +274,30 @@ def test_summary_names_the_commit_of_the_code_that_ran(tmp_path, monkeypatch):
     Simulation(scene).run(tmp_path / "run", progress=False)
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert summary["provenance"]["git_commit"] == "c0ffee1"
+
+
+def test_a_new_body_kind_that_diverges_is_stopped_with_its_own_diagnosis(tmp_path):
+    """The watchdog formats the toy system's :class:`Diagnosis` without knowing its keys: the run
+    ends ``diverged``, the summary names the system, the point and the step."""
+    import json
+
+    from mlsgalerkin.simulation import SimulationDiverged
+
+    scene, _ = _scene(t_end=0.02)
+    sim = Simulation(scene)
+    assert isinstance(sim.state.systems["point_masses"], SystemState)
+    solver = sim.solver("point_masses")
+    step = solver.begin_step
+
+    def poisoned(t, dt):
+        step(t, dt)
+        if solver.outer_steps == 4:
+            solver.state.x[1, 0] = np.inf
+
+    solver.begin_step = poisoned
+    with pytest.raises(SimulationDiverged, match=r"at step 4 .*point_masses mass 1 — position is not finite"):
+        sim.run(out=tmp_path, progress=False)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    d = summary["diagnosis"]
+    assert summary["status"] == "diverged"
+    assert (d["system"], d["point"], d["index"], d["mass"], d["step"]) == ("point_masses", "mass", 1, 1, 4)

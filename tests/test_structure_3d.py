@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from skfem import MeshHex, MeshTet
 
-from mlsgalerkin.contact import PenaltyContact
 from mlsgalerkin.fluid import FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure
 from mlsgalerkin.fluid.scheme import FluidScheme
+from mlsgalerkin.interactions import PenaltyContact
 from mlsgalerkin.scene import Scene
 from mlsgalerkin.simulation import Simulation
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial
@@ -434,7 +434,7 @@ def test_3d_riding_particles_follow_a_rigid_motion_exactly():
     it (three layers behind) move with the same rigid motion."""
     from mlsgalerkin.dynamics import Surface
     from mlsgalerkin.fluid import WallBody
-    from mlsgalerkin.fluid.coupling import riding_kinematics
+    from mlsgalerkin.interactions import riding_kinematics
 
     box = _box((0.0, 0.0, 0.0), (0.3, 0.2, 0.1))
     walls = WallBody.on_surface("w", box, 0.04, follows="body", layers=3)

@@ -1,4 +1,4 @@
-"""The fluid loads a structure (:mod:`mlsgalerkin.fluid.coupling`): wall particles riding on a
+"""The fluid loads a structure (:mod:`mlsgalerkin.interactions.structure_coupling`): wall particles riding on a
 surface, their reaction spread back to its nodes, and the plate under a water column of
 ``hydrostatic_plate`` at a coarse resolution."""
 
@@ -11,7 +11,7 @@ from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.contact.surface import surface_points
 from mlsgalerkin.dynamics import Surface
 from mlsgalerkin.fluid import WallBody
-from mlsgalerkin.fluid.coupling import riding_kinematics
+from mlsgalerkin.interactions import riding_kinematics
 from mlsgalerkin.problem import load_problem
 from mlsgalerkin.scene import SceneError
 from mlsgalerkin.simulation import Simulation
@@ -60,6 +60,55 @@ def test_a_wall_that_follows_a_structure_needs_its_coupling():
         Simulation(scene)
 
 
+def test_validating_a_coupling_changes_nothing_and_setup_takes_what_the_run_needs():
+    """``problems()`` is validation only: the coupling's attributes are the same after it
+    (it used to resize the reaction records and take the wall body's anchors); the
+    ``Simulation`` calls ``setup(scene)`` for that."""
+    import copy
+
+    mod = load_problem("hydrostatic_plate")
+    scene = mod.make_scene(mod.Parameters(dx=0.1, t_end=0.01, elements=10))
+    coupling = scene.interactions[0]
+    before = copy.deepcopy(vars(coupling))
+    assert scene.problems() == []
+    after = vars(coupling)
+    assert before.keys() == after.keys()
+    for k, v in before.items():
+        assert repr(v) == repr(after[k]), k
+    assert coupling._anchors is None and coupling.reaction.shape == (2,)
+    Simulation(scene)
+    walls = next(b for b in scene.bodies if b.name == coupling.walls)
+    np.testing.assert_array_equal(coupling._anchors, walls.anchors)
+
+
+def test_a_coupling_names_the_solver_method_it_needs(monkeypatch):
+    """The extra methods a coupling calls on the solvers are declared (``DrivesWalls``,
+    ``CarriesStepEndLoad``) and checked before any work, with the body, the solver, what it lacks
+    and the kind of interaction that needs it."""
+    from mlsgalerkin.dynamics import CarriesStepEndLoad, DrivesWalls
+    from mlsgalerkin.fluid.solver import FluidSolver
+    from mlsgalerkin.structure.solver import StructureSolver
+
+    assert issubclass(FluidSolver, DrivesWalls) and issubclass(StructureSolver, CarriesStepEndLoad)
+    assert not issubclass(StructureSolver, DrivesWalls)
+    mod = load_problem("hydrostatic_plate")
+    scene = mod.make_scene(mod.Parameters(dx=0.1, t_end=0.01, elements=10))
+    monkeypatch.delattr(FluidSolver, "wall_reactions")
+    with pytest.raises(SceneError, match=r"StructureCoupling 'coupling': body 'water''s solver FluidSolver "
+                                         r"cannot drive wall particles riding on a structure \(it lacks wall_reactions\); "
+                                         r"interactions of kind StructureCoupling with walls= need a solver that "
+                                         r"implements mlsgalerkin.dynamics.DrivesWalls"):
+        Simulation(scene)
+    monkeypatch.undo()
+    scene.interactions[0].iterations = 3
+    Simulation(scene)   # the structure solver carries the step-end load
+    monkeypatch.delattr(StructureSolver, "set_step_end_load")
+    with pytest.raises(SceneError, match=r"body 'plate''s solver StructureSolver cannot repeat a step with the load at "
+                                         r"the step's end \(it lacks set_step_end_load\); interactions of kind "
+                                         r"StructureCoupling with iterations > 1 need"):
+        Simulation(scene)
+
+
 @pytest.fixture(scope="module")
 def plate_run():
     mod = load_problem("hydrostatic_plate")
@@ -97,7 +146,7 @@ def test_aitken_relaxation_finds_the_fixed_point_of_a_linear_interface_map():
     optimal ``1/(1 − a)`` clipped to (0, 1] (``AITKEN_RANGE``), and the relaxed guess converges to
     the fixed point: in one relaxed pass for an expanding map (``a = −3``, where plain iteration
     diverges), at the plain rate 0.5 when the optimum 2 is clipped to 1."""
-    from mlsgalerkin.fluid import StructureCoupling
+    from mlsgalerkin.interactions import StructureCoupling
 
     for a in (0.5, -3.0):
         c = StructureCoupling("water", "plate", walls="w", iterations=50, relaxation=0.5)

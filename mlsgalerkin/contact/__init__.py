@@ -10,12 +10,14 @@ module                                     contents
 :mod:`~mlsgalerkin.contact.search`         cell-grid broad phase: candidate slave–facet pairs
 :mod:`~mlsgalerkin.contact.penalty`        the penalty kernel: forces, reactions, gaps, totals,
                                            moment, stable time step
-:mod:`~mlsgalerkin.contact.interaction`    :class:`PenaltyContact`, the interaction between two
-                                           bodies of a scene
+:mod:`~mlsgalerkin.contact.law`            :class:`PenaltyLaw`: the one wrapper of the kernel
+                                           (parameters, the fixed reference step, stored energy)
 =========================================  ====================================================
 
-The fluid uses the same kernel against rigid walls through the ``PenaltyWalls`` effect
-(:mod:`mlsgalerkin.fluid.penalty_walls`). The formulas, parameters and measured defaults are
+The interaction between two bodies of a scene, :class:`~mlsgalerkin.interactions.PenaltyContact`,
+is in :mod:`mlsgalerkin.interactions` (``mlsgalerkin.contact.PenaltyContact`` works for one more
+release, with a ``DeprecationWarning``). The fluid uses the same law against rigid walls through
+the ``PenaltyWalls`` effect (:mod:`mlsgalerkin.fluid.penalty_walls`). The formulas, parameters and measured defaults are
 in ``docs/theory/contact.md``.
 
 >>> import numpy as np
@@ -28,6 +30,9 @@ in ``docs/theory/contact.md``.
 [[0.0, 1000.0]]
 """
 
+import warnings
+from typing import Any
+
 from mlsgalerkin.contact.geometry import (
     ClosestPoints,
     closest_points,
@@ -35,7 +40,6 @@ from mlsgalerkin.contact.geometry import (
     facet_normals,
     facet_normals_reference,
 )
-from mlsgalerkin.contact.interaction import PenaltyContact
 from mlsgalerkin.contact.penalty import (
     DEFAULT_ALPHA,
     DEFAULT_DAMPING,
@@ -48,6 +52,7 @@ from mlsgalerkin.contact.penalty import (
     rigid_time_step,
     search_margin,
 )
+from mlsgalerkin.contact.law import PenaltyLaw
 from mlsgalerkin.contact.search import candidate_pairs, candidate_pairs_reference
 from mlsgalerkin.contact.surface import ContactSurface
 
@@ -58,7 +63,7 @@ __all__ = [
     "STABILITY_FACTOR",
     "ClosestPoints",
     "ContactSurface",
-    "PenaltyContact",
+    "PenaltyLaw",
     "PenaltyResult",
     "candidate_pairs",
     "candidate_pairs_reference",
@@ -72,3 +77,16 @@ __all__ = [
     "rigid_time_step",
     "search_margin",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """``PenaltyContact``, moved to :mod:`mlsgalerkin.interactions`: read here for one more
+    release, with a ``DeprecationWarning``."""
+    if name == "PenaltyContact":
+        warnings.warn("mlsgalerkin.contact.PenaltyContact has moved: write 'from mlsgalerkin.interactions import "
+                      "PenaltyContact'; the old name goes in the next release", DeprecationWarning, stacklevel=2)
+        from mlsgalerkin.interactions.penalty_contact import PenaltyContact
+
+        globals()[name] = PenaltyContact  # one warning per process (``from ... import`` looks the name up twice)
+        return PenaltyContact
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

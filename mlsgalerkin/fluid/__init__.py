@@ -38,6 +38,9 @@ Run a scene with :class:`mlsgalerkin.simulation.Simulation`; ready-made scenes l
 :mod:`mlsgalerkin.problems`.
 """
 
+import warnings
+from typing import Any
+
 from mlsgalerkin.fluid.bodies import (
     FluidBody,
     ParticleLimitError,
@@ -48,7 +51,6 @@ from mlsgalerkin.fluid.bodies import (
     wall_box,
 )
 from mlsgalerkin.fluid.consistent_integration import ConsistentIntegration
-from mlsgalerkin.fluid.coupling import StructureCoupling
 from mlsgalerkin.fluid.density_diffusion import DensityDiffusion
 from mlsgalerkin.fluid.effect import Effect
 from mlsgalerkin.fluid.eos import (
@@ -86,7 +88,6 @@ from mlsgalerkin.fluid.viscosity import BulkViscosity, NewtonianViscosity
 from mlsgalerkin.fluid.walls import Walls
 
 __all__ = [
-    "StructureCoupling",
     "BulkViscosity",
     "ConsistentIntegration",
     "DensityDiffusion",
@@ -134,3 +135,16 @@ __all__ = [
     "wall_box",
     "water",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """``StructureCoupling``, moved to :mod:`mlsgalerkin.interactions`: read here for one more
+    release, with a ``DeprecationWarning``."""
+    if name == "StructureCoupling":
+        warnings.warn("mlsgalerkin.fluid.StructureCoupling has moved: write 'from mlsgalerkin.interactions import "
+                      "StructureCoupling'; the old name goes in the next release", DeprecationWarning, stacklevel=2)
+        from mlsgalerkin.interactions.structure_coupling import StructureCoupling
+
+        globals()[name] = StructureCoupling  # one warning per process (``from ... import`` looks the name up twice)
+        return StructureCoupling
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -223,7 +223,7 @@ class WallBody(Body):
         listed (:mod:`mlsgalerkin.fluid.penalty_walls`).
     follows : str, optional
         The name of another body (a structure) whose surface carries these wall particles: an
-        interaction (:class:`~mlsgalerkin.fluid.coupling.StructureCoupling`) sets their
+        interaction (:class:`~mlsgalerkin.interactions.StructureCoupling`) sets their
         positions, velocities, accelerations and normals every step. Built by
         :meth:`on_surface`, which also sets ``anchors``.
     anchors : (n, 4) array, optional

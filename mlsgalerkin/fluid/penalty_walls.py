@@ -5,7 +5,8 @@ A :class:`~mlsgalerkin.fluid.bodies.WallBody` may carry a
 surface=True)`` adds a tank's inner surface), alone or with its wall particles. Every force
 evaluation, for every such wall, the fluid particles are slave nodes of a node-to-surface
 penalty contact against the wall's surface (rigid master, ``m* = M_s``; the kernel and its
-formulas are :mod:`mlsgalerkin.contact.penalty`):
+formulas are :mod:`mlsgalerkin.contact.penalty`, called through the one
+:class:`~mlsgalerkin.contact.law.PenaltyLaw` shared with the interactions):
 
 .. math::
 
@@ -57,14 +58,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mlsgalerkin.contact.penalty import (
-    DEFAULT_ALPHA,
-    DEFAULT_DAMPING,
-    DEFAULT_FEATURE_ANGLE,
-    check_penalty_parameters,
-    penalty_forces,
-    rigid_time_step,
-)
+from mlsgalerkin.contact.law import PenaltyLaw
+from mlsgalerkin.contact.penalty import DEFAULT_ALPHA, DEFAULT_DAMPING, DEFAULT_FEATURE_ANGLE, check_penalty_parameters
 from mlsgalerkin.fluid.bodies import FluidBody, WallBody
 from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
@@ -126,9 +121,15 @@ class PenaltyWalls(Effect):
         self.thickness, self.reach, self.dt_ref = thickness, reach, dt_ref
         self.feature_angle = feature_angle
         self.moment_about = moment_about
-        self._dt_ref: float | None = dt_ref
+        #: The contact law (lengths resolved with the fluid's spacing at set-up; ``None`` before).
+        self.law: PenaltyLaw | None = None
         self._walls: list[str] = []
         self._reset_records()
+
+    @property
+    def _dt_ref(self) -> float | None:
+        """The reference step in use: the law's once set up, else the one given."""
+        return self.law.dt_ref if self.law is not None else self.dt_ref
 
     def _reset_records(self) -> None:
         self.records: dict[str, dict[str, Any]] = {}
@@ -183,9 +184,10 @@ class PenaltyWalls(Effect):
         dx = fluids[0].spacing
         g0, _ = self._lengths(dx)
         x = np.concatenate([b.positions for b in fluids])
+        probe = PenaltyLaw(thickness=g0, reach=g0 + START_CHECK_DEPTH * dx, feature_angle=self.feature_angle,
+                           dt_ref=1.0)   # only the gaps are read
         for w in walls:
-            res = penalty_forces(x, np.zeros_like(x), 1.0, w.surface.nodes, None, None, w.surface.facets, dt_ref=1.0,
-                                 thickness=g0, reach=g0 + START_CHECK_DEPTH * dx, feature_angle=self.feature_angle)
+            res = probe.forces(x, np.zeros_like(x), 1.0, w.surface.nodes, None, None, w.surface.facets)
             behind = np.flatnonzero(res.gaps < -g0 - 1e-9 * dx)
             if behind.size:
                 k = int(behind[np.argmin(res.gaps[behind])])
@@ -213,6 +215,9 @@ class PenaltyWalls(Effect):
                 "For walls that hold fluid use wall_box(..., layers=3, surface=True) with Walls() and PenaltyWalls()",
                 SurfaceOnlyWallWarning, stacklevel=2)
         self._g0, self._reach = self._lengths(state.spacing)
+        # a reference step fixed by an earlier run of this effect is kept, as it always was
+        self.law = PenaltyLaw(thickness=self._g0, reach=self._reach, alpha=self.alpha, damping=self.damping,
+                              feature_angle=self.feature_angle, dt_ref=self._dt_ref)
         d = state.dim
         about = self.moment_about
         self._centre = {}
@@ -238,25 +243,22 @@ class PenaltyWalls(Effect):
         dt = self._safety * min([e.time_step_limit(s) for e in self._others] + [math.inf])
         if self._dt_max is not None:
             dt = min(dt, self._dt_max)
-        if not (math.isfinite(dt) and dt > 0):
-            raise ValueError("PenaltyWalls: no reference time step for the penalty stiffness (no other effect limits "
-                             f"the step, got {dt!r}); give PenaltyWalls(dt_ref=...) or ctx.dt_max")
-        return float(dt)
+        return dt
 
     # ------------------------------------------------------------------ the force stage
     def force(self, s: FluidState) -> None:
-        if self._dt_ref is None:
-            self._dt_ref = self._reference_step(s)
+        law = self.law
+        law.fix_reference_step(lambda: self._reference_step(s), lambda dt: (
+            "PenaltyWalls: no reference time step for the penalty stiffness (no other effect limits the step, got "
+            f"{dt!r}); give PenaltyWalls(dt_ref=...) or the fluid scheme's dt_max"))
         f = s.fluid
         x, v, M = s.x[f], s.v[f], s.M[f]
         contacts = 0
         deepest = 0.0
-        energy = 0.0
+        law.begin()
         for name in self._walls:
             surf = s.wall_surfaces[name]
-            res = penalty_forces(x, v, M, surf.x, surf.v, None, surf.facets, dt_ref=self._dt_ref,
-                                 thickness=self._g0, reach=self._reach, alpha=self.alpha, damping=self.damping,
-                                 feature_angle=self.feature_angle, centre=self._centre[name])
+            res = law.forces(x, v, M, surf.x, surf.v, None, surf.facets, centre=self._centre[name])
             s.force[f] += res.slave_forces
             cols = sensor_columns(name, self._dim)
             for a in range(self._dim):
@@ -272,18 +274,15 @@ class PenaltyWalls(Effect):
             rec["max_abs_moment"] = max(rec["max_abs_moment"], float(np.max(np.abs(moments))))
             contacts += res.contacts
             deepest = max(deepest, res.max_penetration)
-            energy += res.stored_energy
         s.sensors["penalty_contacts"] = int(contacts)
-        s.sensors["penalty_energy"] = energy
+        s.sensors["penalty_energy"] = law.energy
         s.sensors["penalty_max_penetration_dx"] = deepest / self._spacing
         self.max_contacts = max(self.max_contacts, contacts)
         if deepest > self.max_penetration:
             self.max_penetration, self.time_of_max_penetration = deepest, float(s.t)
 
     def time_step_limit(self, s: FluidState) -> float:
-        if self._dt_ref is None:
-            return math.inf
-        return rigid_time_step(self.alpha, self.damping, self._dt_ref, s.dim)
+        return self.law.time_step_limit(s.dim) if self.law is not None else math.inf
 
     # ------------------------------------------------------------------ report and restart
     def summary(self) -> dict[str, Any]:
@@ -293,7 +292,7 @@ class PenaltyWalls(Effect):
             "alpha": self.alpha, "damping": self.damping, "thickness_m": self._g0, "reach_m": self._reach,
             "feature_angle_deg": self.feature_angle, "dt_ref_s": self._dt_ref,
             "stiffness_per_kg_N_per_m_kg": self.alpha / self._dt_ref**2,
-            "time_step_limit_s": rigid_time_step(self.alpha, self.damping, self._dt_ref, self._dim),
+            "time_step_limit_s": self.law.time_step_limit(self._dim),
             "max_penetration_m": self.max_penetration, "max_penetration_dx": self.max_penetration / self._spacing,
             "time_of_max_penetration_s": self.time_of_max_penetration, "max_active_contacts": self.max_contacts,
             "walls": self.records,
@@ -306,7 +305,7 @@ class PenaltyWalls(Effect):
     def load_state_dict(self, d: dict[str, Any]) -> None:
         if not d:
             return
-        self._dt_ref = d["dt_ref"]
+        self.law.dt_ref = d["dt_ref"]
         self.records = {k: dict(v) for k, v in d["records"].items()}
         self.max_penetration = float(d["max_penetration"])
         self.time_of_max_penetration = d["time_of_max_penetration"]

@@ -38,10 +38,13 @@ number of fluid particles whose shape functions fell back to a lower order
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
+
+if TYPE_CHECKING:  # pragma: no cover
+    from mlsgalerkin.dynamics import Diagnosis
 
 __all__ = ["CHECKPOINT_ARRAYS", "FluidState", "WallSurfaceState"]
 
@@ -210,9 +213,10 @@ class FluidState:
             data[k] = np.asarray(v).astype(np.int32) if np.asarray(v).dtype == bool else v
         return self.x, data
 
-    def health(self, limits: Any) -> dict | None:
-        """``None`` if the fluid is sound, else a diagnosis (:func:`mlsgalerkin.fluid.health.diagnose`)
-        with ``limits.density_ratio`` and ``limits.max_speed`` (a :class:`~mlsgalerkin.monitors.Watchdog`)."""
+    def health(self, limits: Any) -> "Diagnosis | None":
+        """``None`` if the fluid is sound, else a :class:`~mlsgalerkin.dynamics.Diagnosis`
+        (:func:`mlsgalerkin.fluid.health.diagnose`) with ``limits.density_ratio`` and
+        ``limits.max_speed`` (a :class:`~mlsgalerkin.monitors.Watchdog`)."""
         from mlsgalerkin.fluid.health import diagnose
 
         return diagnose(self, limits.density_ratio, limits.max_speed)

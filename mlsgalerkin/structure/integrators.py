@@ -10,7 +10,7 @@ a 5 cm aluminium plate): holding :math:`\mathbf f_n` over the step (a lag of hal
 plate gained energy at an e-fold every few milliseconds) and applying :math:`\mathbf f_n` as
 impulses at the step boundaries as the fluid's kick-drift-kick does (every impulse rings the
 plate's stiff through-thickness modes, which the fluid then sees). The wall pressure must also
-see the surface's acceleration (:class:`~mlsgalerkin.fluid.coupling.StructureCoupling`): without
+see the surface's acceleration (:class:`~mlsgalerkin.interactions.StructureCoupling`): without
 it the same plate diverged.
 
 :class:`ElasticMotion` advances an :class:`~mlsgalerkin.structure.elastic.ElasticBody`:

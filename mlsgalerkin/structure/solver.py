@@ -36,7 +36,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from mlsgalerkin.dynamics import Body, SceneView, Solver, Surface
+from mlsgalerkin.dynamics import Body, Diagnosis, SceneView, Solver, Surface
 from mlsgalerkin.structure.elastic import ElasticBody
 from mlsgalerkin.structure.integrators import ElasticMotion, RigidMotion
 from mlsgalerkin.structure.rigid import RigidBody
@@ -90,12 +90,62 @@ class StructureState:
             offset += m.n_frame_points
         return out
 
-    def health(self, limits: Any) -> dict | None:
+    def health(self, limits: Any) -> Diagnosis | None:
+        """``None`` if every body is sound, else the :class:`~mlsgalerkin.dynamics.Diagnosis` of
+        the first bad body: a frame node (mesh vertex, or rigid surface node) whose displacement
+        or velocity is not finite, a state that is not finite elsewhere (the whole body), or —
+        when ``limits.max_displacement`` (m) is set — the node displaced furthest beyond it.
+        ``position`` is the node's rest position (``at_rest``)."""
+        max_u = getattr(limits, "max_displacement", None)
         for name, m in self.motions.items():
-            if not m.finite():
-                return {"quantity": "structure displacement or velocity", "body": name,
-                        "hint": "the structure's state is not finite: lower the time step or the contact stiffness"}
+            diag = _body_health(name, m, max_u)
+            if diag is not None:
+                return diag
         return None
+
+
+#: What to try when a structure's state is unsound.
+HINT = ("Try a smaller time step (dt_max), a smaller contact stiffness (alpha), or check the structure's "
+        "material and supports.")
+
+
+def _body_health(name: str, m: Motion, max_displacement: float | None) -> Diagnosis | None:
+    """The diagnosis of one body (:meth:`StructureState.health`); reads only what the motion
+    shows to monitors (``finite()``, ``frame()``)."""
+    finite = m.finite()
+    if finite and max_displacement is None:
+        return None
+    points, data = m.frame()
+    u, v = np.asarray(data["displacement"]), np.asarray(data["velocity"])
+    rest = _rest_positions(m, points, u)
+    where = {"body": name, "system": "structure", "hint": HINT}
+    for quantity, arr in (("displacement", u), ("velocity", v)):
+        bad = np.flatnonzero(~np.isfinite(arr).all(axis=1))
+        if bad.size:
+            k = int(bad[0])
+            return Diagnosis(quantity=quantity, value=arr[k], problem="is not finite", point="node", index=k,
+                             position=rest[k], at_rest=True, **where)
+    if not finite:
+        return Diagnosis(quantity="state", value=(), problem="is not finite (a degree of freedom off the frame "
+                         "nodes, or the rigid motion)", **where)
+    size = np.sqrt(np.einsum("ij,ij->i", u, u))
+    k = int(np.argmax(size)) if size.size else 0
+    if size.size and size[k] > max_displacement:
+        return Diagnosis(quantity="displacement", value=u[k], limit=float(max_displacement), point="node", index=k,
+                         problem=f"|u| = {size[k]:.4g} m exceeds {max_displacement:.4g} m", position=rest[k],
+                             at_rest=True, **where)
+    return None
+
+
+def _rest_positions(m: Motion, points: NDArray[np.float64], u: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The frame nodes at rest (m): the mesh's vertices of an elastic body, the surface nodes of
+    a rigid body; ``points − u`` for any other motion."""
+    body = m.body
+    if isinstance(body, ElasticBody):
+        return np.asarray(body.mesh.p, dtype=float).T
+    if isinstance(body, RigidBody):
+        return np.asarray(body.surface.nodes, dtype=float)
+    return points - u
 
 
 class StructureSolver(Solver):
