@@ -34,6 +34,7 @@ owning element (scikit-fem sorts facet nodes) so that the normal points out of t
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -42,6 +43,7 @@ from typing import ClassVar
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
+from scipy.sparse.linalg import eigsh
 from skfem import (
     Basis,
     BilinearForm,
@@ -61,11 +63,13 @@ from skfem import (
 )
 from skfem.helpers import dot
 from skfem.models.elasticity import lame_parameters, linear_elasticity
+from threadpoolctl import threadpool_limits
 
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.dynamics import Body
 
-__all__ = ["ELEMENTS", "ELEMENTS_3D", "INTEGRATORS", "MODELS", "STRUCTURE_SOLVER", "ElasticBody", "ElasticMaterial", "WetSurface"]
+__all__ = ["ARPACK_SEED", "ELEMENTS", "ELEMENTS_3D", "INTEGRATORS", "MODELS", "STRUCTURE_SOLVER", "ElasticBody",
+           "ElasticMaterial", "WetSurface", "arpack_eigenvalue"]
 
 FloatArray = NDArray[np.float64]
 Predicate = Callable[[FloatArray], FloatArray]
@@ -80,6 +84,23 @@ ELEMENTS_3D = {"Hex1": ElementHex1, "Hex2": ElementHex2, "P1": ElementTetP1}
 MODELS = ("linear", "stvenant_kirchhoff", "neo_hookean")
 #: Time integrators: explicit central differences (sub-cycled) and implicit Newmark (linear only).
 INTEGRATORS = ("explicit", "newmark")
+#: Seed of ARPACK's start vector in :func:`arpack_eigenvalue`.
+ARPACK_SEED = 0
+_EIGSH_TAKES_RNG = "rng" in inspect.signature(eigsh).parameters
+
+
+def arpack_eigenvalue(A: sp.spmatrix, **options: object) -> float:
+    """The eigenvalue of the symmetric ``A`` that scipy's ``eigsh(A, k=1, **options)`` finds, the
+    same in every process: ARPACK starts from a fixed pseudo-random vector (seed
+    :data:`ARPACK_SEED`) and draws any restart vector from the same seeded generator, on one BLAS
+    thread. Without ``v0`` scipy (≥ 1.15) draws the start from the operating system's entropy, so
+    the eigenvalue differed at round-off between runs (and, through the sub-step and the
+    high-mode damping, every number of an explicit elastic run)."""
+    rng = np.random.default_rng(ARPACK_SEED)
+    v0 = rng.uniform(-1.0, 1.0, A.shape[0])
+    seeded = {"rng": rng} if _EIGSH_TAKES_RNG else {}
+    with threadpool_limits(limits=1, user_api="blas"):
+        return float(eigsh(A, k=1, v0=v0, return_eigenvectors=False, **seeded, **options)[0])
 
 
 @dataclass(frozen=True)
@@ -438,25 +459,19 @@ class ElasticBody(Body):
 
     def highest_frequency(self) -> float:
         """``ω_max`` (rad/s): the square root of the largest eigenvalue of ``M⁻¹K`` over the free
-        degrees of freedom (scipy ``eigsh``)."""
-        from scipy.sparse.linalg import eigsh
-
+        degrees of freedom (scipy ``eigsh`` from a fixed start vector: the same in every process)."""
         free = self.free
         s = 1.0 / np.sqrt(self.lumped_mass[free])
         A = sp.diags(s) @ self.stiffness[free][:, free] @ sp.diags(s)
-        lam = eigsh(A, k=1, which="LA", return_eigenvectors=False, tol=1e-6)[0]
-        return float(np.sqrt(lam))
+        return float(np.sqrt(arpack_eigenvalue(A, which="LA", tol=1e-6)))
 
     def lowest_frequency(self) -> float:
         """``ω₁`` (rad/s) of the clamped body: the smallest eigenvalue of ``M⁻¹K`` over the free
-        degrees of freedom (``eigsh`` in shift-invert mode)."""
-        from scipy.sparse.linalg import eigsh
-
+        degrees of freedom (``eigsh`` in shift-invert mode, from a fixed start vector)."""
         free = self.free
         K = self.stiffness[free][:, free]
         M = sp.diags(self.lumped_mass[free])
-        lam = eigsh(K, k=1, M=M, sigma=0.0, which="LM", return_eigenvectors=False)[0]
-        return float(np.sqrt(lam))
+        return float(np.sqrt(arpack_eigenvalue(K, M=M, sigma=0.0, which="LM")))
 
     def stable_time_step(self) -> float:
         """``2/ω_max`` (s), the stability limit of undamped central differences."""
