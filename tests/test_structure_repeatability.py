@@ -54,3 +54,45 @@ def test_two_identical_runs_of_an_explicit_elastic_body_are_bit_for_bit(make):
     bodies = [r.summary["structure"]["bodies"][name] for r in runs]
     for key in ("omega_max_rad_s", "first_mode_damping_ratio", "substep_limit_s", "high_mode_damping_a1_s"):
         assert bodies[0][key] == bodies[1][key], key
+
+
+@pytest.mark.parametrize("old, new", [
+    ("ElasticMotion", "mlsgalerkin.structure.steppers.stepper_for"),
+    ("RigidMotion", "mlsgalerkin.structure.steppers.RigidMotion"),
+    ("quaternion_matrix", "mlsgalerkin.structure.steppers.rotation.quaternion_matrix"),
+    ("SUBSTEP_SAFETY", "mlsgalerkin.structure.steppers.central_difference.SUBSTEP_SAFETY"),
+])
+def test_the_old_integrators_module_still_imports_with_a_warning_naming_the_new_name(old, new):
+    import importlib
+
+    integrators = importlib.import_module("mlsgalerkin.structure.integrators")
+    with pytest.warns(DeprecationWarning, match=new.replace(".", r"\.")):
+        value = getattr(integrators, old)
+    module, _, name = new.rpartition(".")
+    assert value is getattr(importlib.import_module(module), name)
+
+
+def test_the_old_elastic_motion_makes_the_stepper_of_the_body_s_method():
+    from mlsgalerkin.structure.steppers import CentralDifference, Newmark
+
+    with pytest.warns(DeprecationWarning):
+        from mlsgalerkin.structure.integrators import ElasticMotion
+    assert type(ElasticMotion(beam_like())) is CentralDifference
+    mesh = MeshQuad.init_tensor(np.array([0.0, 0.01]), np.linspace(0.0, 0.1, 5))
+    newmark = ElasticBody("b", mesh, ElasticMaterial(1e6, 0.3, 1000.0), "Q2", integrator="newmark",
+                          clamped=lambda x: np.isclose(x[1], 0.0))
+    assert type(ElasticMotion(newmark)) is Newmark
+
+
+def test_one_lame_conversion():
+    """``lame(dim)`` is the one conversion: 3D and plane strain the same pair, plane stress the
+    reduced λ in 2D only; the deprecated ``lame3d()`` is ``lame(3)``."""
+    stress = ElasticMaterial(1e7, 0.3, 1000.0, plane="stress")
+    strain = ElasticMaterial(1e7, 0.3, 1000.0, plane="strain")
+    lam, mu = 1e7 * 0.3 / (1.3 * 0.4), 1e7 / 2.6
+    assert strain.lame(2) == strain.lame(3) == stress.lame(3) == pytest.approx((lam, mu))
+    assert stress.lame() == stress.lame(2) == pytest.approx((2 * lam * mu / (lam + 2 * mu), mu))
+    with pytest.warns(DeprecationWarning, match=r"lame\(3\)"):
+        assert stress.lame3d() == stress.lame(3)
+    with pytest.raises(ValueError, match="2D or 3D"):
+        strain.lame(1)
