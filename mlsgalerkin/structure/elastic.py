@@ -68,7 +68,6 @@ from threadpoolctl import threadpool_limits
 
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.dynamics import Body
-from mlsgalerkin.structure.explicit import leapfrog_step
 
 __all__ = ["ARPACK_SEED", "ELEMENTS", "ELEMENTS_3D", "INTEGRATORS", "MODELS", "STRUCTURE_SOLVER", "ElasticBody",
            "ElasticMaterial", "WetSurface", "arpack_eigenvalue"]
@@ -539,6 +538,8 @@ class ElasticBody(Body):
 
     def step(self, dt: float, f_ext: FloatArray | None = None) -> None:
         """Deprecated: :func:`mlsgalerkin.structure.explicit.leapfrog_step` on arrays you keep."""
+        from mlsgalerkin.structure.explicit import leapfrog_step
+
         u, v = self._legacy_state("step()")
         leapfrog_step(self, u, v, dt, f_ext)
 
