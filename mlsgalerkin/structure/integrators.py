@@ -6,7 +6,7 @@ per method. Every old name still imports from here for one release, with a
 old name                    new name
 ==========================  =====================================================================
 ``ElasticMotion(body)``     ``steppers.stepper_for(body)`` (a ``CentralDifference`` or ``Newmark``)
-``RigidMotion``             ``steppers.RigidMotion``
+``RigidMotion(body)``       ``steppers.stepper_for(body)`` (a ``RigidMotion`` or ``FreeRigidMotion``)
 ``SUBSTEP_SAFETY``          ``steppers.central_difference.SUBSTEP_SAFETY``
 ``NONLINEAR_ORDER``         ``steppers.central_difference.NONLINEAR_ORDER``
 ``NEWMARK_REUSE``           ``steppers.newmark.NEWMARK_REUSE``
@@ -29,7 +29,7 @@ __all__: list[str] = []
 #: Old name → (module under mlsgalerkin.structure.steppers, new name).
 _MOVED = {
     "ElasticMotion": ("", "stepper_for"),
-    "RigidMotion": ("", "RigidMotion"),
+    "RigidMotion": ("", "stepper_for"),
     "SUBSTEP_SAFETY": ("central_difference", "SUBSTEP_SAFETY"),
     "NONLINEAR_ORDER": ("central_difference", "NONLINEAR_ORDER"),
     "NEWMARK_REUSE": ("newmark", "NEWMARK_REUSE"),

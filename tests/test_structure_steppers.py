@@ -1,4 +1,5 @@
-"""Two identical runs of an elastic body give identical numbers, bit for bit.
+"""The structure steppers: two identical runs of an elastic body give identical numbers, bit for
+bit, and so does a restart; the stepper of each body; the old names; one Lamé conversion.
 
 The explicit stepper takes its sub-step and its high-mode damping from the highest frequency
 ``ω_max`` (scipy ``eigsh``); ARPACK must start from a fixed vector, or ``ω_max`` (and every number
@@ -11,9 +12,12 @@ import numpy as np
 import pytest
 from skfem import MeshQuad
 
+from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.scene import Scene
 from mlsgalerkin.simulation import Simulation
-from mlsgalerkin.structure import ElasticBody, ElasticMaterial
+from mlsgalerkin.structure import ElasticBody, ElasticMaterial, RigidBody
+from mlsgalerkin.structure.rigid import Hinge
+from mlsgalerkin.structure.steppers import FreeRigidMotion, RigidMotion, stepper_for
 
 
 def gate_like() -> ElasticBody:
@@ -58,7 +62,7 @@ def test_two_identical_runs_of_an_explicit_elastic_body_are_bit_for_bit(make):
 
 @pytest.mark.parametrize("old, new", [
     ("ElasticMotion", "mlsgalerkin.structure.steppers.stepper_for"),
-    ("RigidMotion", "mlsgalerkin.structure.steppers.RigidMotion"),
+    ("RigidMotion", "mlsgalerkin.structure.steppers.stepper_for"),
     ("quaternion_matrix", "mlsgalerkin.structure.steppers.rotation.quaternion_matrix"),
     ("SUBSTEP_SAFETY", "mlsgalerkin.structure.steppers.central_difference.SUBSTEP_SAFETY"),
 ])
@@ -113,3 +117,18 @@ def test_an_explicit_elastic_body_with_high_mode_damping_restarts_bit_for_bit(tm
     for x, y in ((a.u, b.u), (a.v, b.v), (a.a, b.a)):
         assert np.array_equal(x, y)
     assert a.observables() == b.observables()
+
+
+def test_each_rigid_body_gets_the_stepper_of_its_method_and_a_wrong_one_is_refused_clearly():
+    hinged = RigidBody.beam("beam", base=(0.0, 0.0), length=1.0, mass=1.0, thickness=0.02,
+                            constraint=Hinge((0.0, 0.0), stiffness=100.0))
+    surface = ContactSurface.tank((-0.1, -0.1, -0.1), (0.1, 0.1, 0.1), open_top=False).flipped()
+    box = RigidBody("box", surface, 1.0, (0.01, 0.02, 0.03), (0.0, 0.0, 0.0), constraint="free")
+    assert type(stepper_for(hinged)) is RigidMotion
+    assert type(stepper_for(box)) is FreeRigidMotion
+    with pytest.raises(TypeError, match="FreeRigidMotion"):
+        RigidMotion(box)
+    with pytest.raises(TypeError, match="turns about one axis"):
+        FreeRigidMotion(hinged)
+    with pytest.raises(TypeError, match="ElasticBody and RigidBody"):
+        stepper_for(object.__new__(type("Other", (), {"name": "x"})))
