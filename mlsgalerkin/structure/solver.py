@@ -2,10 +2,10 @@ r""":class:`StructureSolver`: advances the elastic and rigid bodies of a scene i
 
 Per outer step (:mod:`mlsgalerkin.dynamics`):
 
-- ``begin_step(t, Δt)``: every body advances to ``t + Δt`` with the surface forces of the last
-  exchange held (:mod:`mlsgalerkin.structure.integrators`: sub-cycled central differences,
-  Newmark, or rigid-body Verlet, with the splitting of Dullweber, Leimkuhler & McLachlan 1997
-  for the rotation of a free 3D body);
+- ``begin_step(t, Δt)``: every body's stepper advances it to ``t + Δt`` with the surface forces
+  of the last exchange ramped over the step (:mod:`mlsgalerkin.structure.steppers`: sub-cycled
+  central differences, Newmark, or rigid-body Verlet, with the splitting of Dullweber,
+  Leimkuhler & McLachlan 1997 for the rotation of a free 3D body);
 - the interactions read each body's :class:`~mlsgalerkin.dynamics.Surface` at ``t + Δt``
   (positions, velocities, accelerations, segments, nodal masses) and add forces to its surface
   nodes (cleared first, then accumulated over the exchange and the after-step exchange);
@@ -38,13 +38,14 @@ from numpy.typing import NDArray
 
 from mlsgalerkin.dynamics import Body, Diagnosis, SceneView, Solver, Surface
 from mlsgalerkin.structure.elastic import ElasticBody
-from mlsgalerkin.structure.integrators import ElasticMotion, RigidMotion
 from mlsgalerkin.structure.rigid import RigidBody
 from mlsgalerkin.structure.scheme import StructureScheme
+from mlsgalerkin.structure.steppers import Stepper, stepper_for
 
 __all__ = ["StructureSolver", "StructureState"]
 
-Motion = ElasticMotion | RigidMotion
+#: The state of one body in a run: its stepper (:mod:`mlsgalerkin.structure.steppers`).
+Motion = Stepper
 
 
 @dataclass
@@ -60,7 +61,8 @@ class StructureState:
         return 0  # structure nodes are not counted as particles in the throughput
 
     def body(self, name: str) -> Motion:
-        """The state and integrator of body ``name``."""
+        """The stepper of body ``name``: its live state (an elastic body's ``u``, ``v``, ``a``; a
+        rigid body's ``c``, ``V``, ``theta``, ``F``, ...) and how it advances."""
         return self.motions[name]
 
     def body_names(self) -> list[str]:
@@ -171,8 +173,7 @@ class StructureSolver(Solver):
 
     def __init__(self, bodies: list[Body], scheme: StructureScheme, scene: SceneView) -> None:
         self.scheme = scheme
-        self._state = StructureState({b.name: (ElasticMotion(b) if isinstance(b, ElasticBody) else RigidMotion(b))
-                                      for b in bodies})
+        self._state = StructureState({b.name: stepper_for(b) for b in bodies})
 
     @property
     def state(self) -> StructureState:
