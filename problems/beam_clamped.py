@@ -121,7 +121,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                    negative_pressure=p.negative_pressure, penalty_thickness=0.25 * p.dx, spacing=p.dx)
 
     def tip_x(state) -> float:
-        m = state.systems["structure"].body("beam")
+        m = state.body("beam")
         return float(beam.point_displacements(m.u)["tip"][0])
 
     return Scene(

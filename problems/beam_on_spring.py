@@ -144,13 +144,13 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                           axis=1, count=5) - hinge
 
     def pressure_p4(state) -> float:
-        theta = state.systems["structure"].body("beam").theta
+        theta = state.body("beam").theta
         c, s = math.cos(theta), math.sin(theta)
         pts = hinge + local @ np.array([[c, s], [-s, c]])
         return float(pressure_at(state.fluid, pts, approximation.kernel).mean())
 
     def angle(state) -> float:
-        return float(state.systems["structure"].body("beam").theta)
+        return float(state.body("beam").theta)
 
     return Scene(
         [water_body, _tank(p, top), riding, beam], [scheme], t_end=p.t_end, name="beam_on_spring",

@@ -162,7 +162,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
 
     def tip(k: int):
         def read(state) -> float:
-            m = state.systems["structure"].body("gate")
+            m = state.body("gate")
             return float(gate.point_displacements(m.u)["tip"][k])
         return read
 

@@ -108,7 +108,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     n = water_body.n
 
     def midspan(state) -> float:
-        m = state.systems["structure"].body("plate")
+        m = state.body("plate")
         return float(plate.point_displacements(m.u)["mid"][1])
 
     def crossings(state) -> float:

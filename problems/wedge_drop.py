@@ -124,10 +124,10 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                    negative_pressure=p.negative_pressure, penalty_thickness=0.25 * p.dx, spacing=p.dx)
 
     def velocity(state) -> float:
-        return -float(state.systems["structure"].body("wedge").V[1])
+        return -float(state.body("wedge").V[1])
 
     def force(state) -> float:
-        return SECTION * float(state.systems["structure"].body("wedge").F[1])
+        return SECTION * float(state.body("wedge").F[1])
 
     return Scene(
         [water_body, tank, riding, wedge], [scheme], t_end=p.t_end, name="wedge_drop", interactions=[coupling],

@@ -10,7 +10,7 @@ import pytest
 from skfem import MeshQuad
 
 from mlsgalerkin.contact import ContactSurface
-from mlsgalerkin.scene import Scene, SceneError
+from mlsgalerkin.scene import Probe, Scene, SceneError
 from mlsgalerkin.simulation import Simulation
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial, Hinge, RigidBody
 from mlsgalerkin.structure.explicit import subcycle_linear, subcycle_linear_reference
@@ -152,3 +152,16 @@ def test_bad_structure_input_is_refused_clearly():
         RigidBody.beam("b", (0, 0), 2.0, 1.0, 0.02, constraint=Hinge((0, 0), stiffness=5.0), gravity=(0, -9.81))
     with pytest.raises(ValueError, match="constraint must be one of"):
         RigidBody("r", square, 1.0, 1.0, (0.5, 0.5), constraint="sliding")
+
+
+def test_a_probe_reads_a_body_by_name():
+    """``state.body(name)`` is the public way for a probe to read a structure (elastic: ``u``, ``v``;
+    rigid: ``X``, ``V``, ``theta``, ``F``); an unknown name says which bodies have a live state."""
+    beam = hinged_beam()
+    beam.angular_velocity = 0.1
+    seen = []
+    probe = Probe("angle_read", lambda state: seen.append(state.body("beam").theta) or seen[-1])
+    res = Simulation(Scene([beam], [StructureScheme(dt_max=1e-3)], t_end=0.01, probes=[probe])).run(progress=False)
+    assert np.array_equal(res.timeseries["angle_read"], res.timeseries["beam_angle"])
+    with pytest.raises(KeyError, match=r"no body 'nope' with a live state in this run; bodies with one: \['beam'\]"):
+        res.state.body("nope")
