@@ -26,19 +26,27 @@ script keeps itself (a run uses :class:`~mlsgalerkin.structure.steppers.CentralD
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numba
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.structure.elastic import ElasticBody
-
-__all__ = ["leapfrog_step", "subcycle_linear", "subcycle_linear_reference"]
+__all__ = ["DiscreteBody", "leapfrog_step", "subcycle_linear", "subcycle_linear_reference"]
 
 FloatArray = NDArray[np.float64]
+
+
+class DiscreteBody(Protocol):
+    """What a central-difference step needs of a discretised body (an
+    :class:`~mlsgalerkin.structure.elastic.ElasticBody` has it): its lumped mass ``(N,)`` (kg,
+    per unit depth in 2D), its clamped degrees of freedom and its internal force ``f(u) (N,)`` (N)."""
+
+    lumped_mass: FloatArray
+    clamped_dofs: NDArray[np.int64]
+
+    def internal_force(self, u: FloatArray) -> FloatArray: ...
 
 
 @numba.njit(cache=True)
@@ -87,7 +95,7 @@ def subcycle_linear_reference(K: sp.csr_matrix, inv_m: FloatArray, fixed: NDArra
         v += 0.5 * dt * a
 
 
-def leapfrog_step(body: ElasticBody, u: FloatArray, v: FloatArray, dt: float, f_ext: FloatArray | None = None) -> None:
+def leapfrog_step(body: DiscreteBody, u: FloatArray, v: FloatArray, dt: float, f_ext: FloatArray | None = None) -> None:
     """One undamped central-difference step of ``dt`` (s) of the linear ``body`` in place on the
     displacement ``u (N,)`` (m) and the half-step velocity ``v (N,)`` (m/s) under external nodal
     forces ``f_ext (N,)`` (N): ``v += dt M⁻¹(f_ext − K u)``, ``u += dt v``, the clamped degrees of
