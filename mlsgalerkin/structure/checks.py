@@ -237,6 +237,12 @@ def element_problems(p: FloatArray, t: NDArray[np.int64], facets: NDArray[np.int
     t = t[:nv]
     det, size = _jacobians(p, t, geometry())
     tol = JACOBIAN_TOLERANCE * size ** d
+    folded = np.flatnonzero((det > tol[:, None]).any(axis=1) & (det < -tol[:, None]).any(axis=1))
+    if folded.size:
+        e = int(folded[0])
+        return [f"{owner}: element {e} is folded (its Jacobian determinant changes sign inside it: a bow-tie or a "
+                f"vertex pushed through an edge; vertices {t[:, e].tolist()}); {folded.size} such element"
+                f"{'s' if folded.size > 1 else ''}: order each element's vertices around it, or re-mesh"]
     degenerate = np.flatnonzero((np.abs(det) <= tol[:, None]).any(axis=1))
     if degenerate.size:
         e = int(degenerate[0])
@@ -244,12 +250,6 @@ def element_problems(p: FloatArray, t: NDArray[np.int64], facets: NDArray[np.int
                 f"is {np.abs(det[e]).min():.3g} at a vertex or quadrature point; vertices {t[:, e].tolist()} at "
                 f"{np.round(p[:, t[:, e]].T, 9).tolist()}); {degenerate.size} such element"
                 f"{'s' if degenerate.size > 1 else ''}: remove repeated or collinear nodes, or re-mesh"]
-    folded = np.flatnonzero((det > 0).any(axis=1) & (det < 0).any(axis=1))
-    if folded.size:
-        e = int(folded[0])
-        return [f"{owner}: element {e} is folded (its Jacobian determinant changes sign inside it: a bow-tie or a "
-                f"vertex pushed through an edge; vertices {t[:, e].tolist()}); {folded.size} such element"
-                f"{'s' if folded.size > 1 else ''}: order each element's vertices around it, or re-mesh"]
     if facets is None or f2t is None:
         return []
     inner = np.flatnonzero(f2t[1] >= 0)
@@ -461,31 +461,12 @@ def structure_scene_problems(bodies: Sequence[Any], others: Sequence[Any], t_end
 
 
 def _outline(body: Any) -> tuple[FloatArray, NDArray[np.int64]] | None:
-    """The nodes ``(n, d)`` and the closed boundary facets of a structure body at rest."""
-    mesh = getattr(body, "mesh", None)
-    if mesh is not None:
-        facets = mesh.facets[:, mesh.boundary_facets()]
-        if mesh.p.shape[0] == 3 and facets.shape[0] == 4:          # hexahedra: split each face
-            facets = _quads_to_triangles(mesh.p, facets)
-        return mesh.p.T, (facets.T if mesh.p.shape[0] == 2 or facets.shape[0] == 3 else facets)
-    surface = getattr(body, "surface", None)
+    """The nodes ``(n, d)`` and oriented boundary facets of a structure body at rest (an elastic
+    body's whole boundary, a rigid body's surface)."""
+    surface = body.surface() if callable(getattr(body, "surface", None)) else getattr(body, "surface", None)
     if surface is None or not hasattr(surface, "nodes"):
         return None
     return np.asarray(surface.nodes, dtype=float), np.asarray(surface.facets, dtype=np.int64)
-
-
-def _quads_to_triangles(p: FloatArray, quads: NDArray[np.int64]) -> NDArray[np.int64]:
-    """``(k, 3)`` triangles of the quadrilateral faces ``quads (4, m)`` (sorted vertex indices,
-    as scikit-fem stores them): each face ordered around its centre and split in two."""
-    x = p[:, quads]                                                   # (3, 4, m)
-    c = x.mean(axis=1, keepdims=True)
-    e1 = x[:, 0] - c[:, 0]
-    n = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0], axis=0)
-    n = np.where(np.linalg.norm(n, axis=0) > 0, n, np.cross(x[:, 1] - x[:, 0], x[:, 3] - x[:, 0], axis=0))
-    e2 = np.cross(n, e1, axis=0)
-    angle = np.arctan2(np.einsum("dvm,dm->vm", x - c, e2), np.einsum("dvm,dm->vm", x - c, e1))
-    order = np.take_along_axis(quads, np.argsort(angle, axis=0), axis=0)
-    return np.concatenate([order[[0, 1, 2]].T, order[[0, 2, 3]].T])
 
 
 def _run_length_problems(owner: str, body: Any, t_end: float) -> list[str]:

@@ -270,6 +270,10 @@ class ElasticBody(Body):
         table = ELEMENTS if d == 2 else ELEMENTS_3D
         if element not in table:
             raise ValueError(f"{owner}: element must be one of {sorted(table)} for a {d}D mesh, got {element!r}")
+        if table[element].refdom is not type(mesh).elem.refdom:
+            fits = sorted(k for k, e in table.items() if e.refdom is type(mesh).elem.refdom)
+            raise ValueError(f"{owner}: element {element!r} does not fit a {type(mesh).__name__} (its cells are "
+                             f"{type(mesh).elem.refdom.__name__[3:].lower()}s); use {' or '.join(fits)}")
         if not isinstance(material, ElasticMaterial):
             raise TypeError(f"{owner}: material must be an ElasticMaterial, got {type(material).__name__}")
         if model not in MODELS:
