@@ -313,7 +313,7 @@ STRUCTURE_CLI_CASES = [
     ("spring beam: stiff as steel bar", ["beam_on_spring", "--set", "stiffness=1e20"], SUBSTEPS),
     ("spring beam: weightless", ["beam_on_spring", "--set", "beam_mass=1e-12"], SUBSTEPS),
     ("spring beam: zero thickness", ["beam_on_spring", "--set", "thickness=0"], "parameter thickness"),
-    ("wedge: 100 m tall, outside", ["wedge_drop", "--set", "side_height=100"], "outside the tank"),
+    ("wedge: zero breadth", ["wedge_drop", "--set", "breadth=0"], "parameter breadth"),
     ("wedge: zero mass", ["wedge_drop", "--set", "mass=0"], "parameter mass"),
 ]
 
@@ -559,7 +559,7 @@ def _scene_3d(structure):
 
 STRUCTURE_SCENE_CASES = [
     ("elastic outside the tank", lambda: _scene_2d(_elastic_at((5.0, 0.0), (5.04, 0.02))), "outside the tank"),
-    ("elastic far above the tank", lambda: _scene_2d(_elastic_at((0.12, 9.0), (0.16, 9.02))), "outside the tank"),
+    ("elastic left of the tank", lambda: _scene_2d(_elastic_at((-5.0, 0.0), (-4.96, 0.02))), "outside the tank"),
     ("elastic under the floor", lambda: _scene_2d(_elastic_at((0.12, -1.0), (0.16, -0.98))), "under the floor"),
     ("elastic in the water", lambda: _scene_2d(_elastic_at((0.02, 0.01), (0.06, 0.03))), "overlaps the fluid"),
     ("elastic too stiff for its step",
@@ -596,7 +596,8 @@ def test_misplaced_structures_are_refused_before_any_work(name, make, fragment):
     lambda: _scene_2d(_block_at(0.12, 0.0)),
     lambda: _scene_3d(_hex_at((0.06, 0.0, 0.0), (0.09, 0.04, 0.04))),
     lambda: _scene_3d(_rigid_3d((0.06, 0.0, 0.0), (0.09, 0.04, 0.04))),
-], ids=["elastic 2D", "rigid 2D", "elastic 3D", "rigid 3D"])
+    lambda: _scene_2d(_block_at(0.12, 5.0)),
+], ids=["elastic 2D", "rigid 2D", "elastic 3D", "rigid 3D", "rigid 2D high above (the tank is open)"])
 def test_the_same_structures_well_placed_are_accepted(make):
     """The scenes of the table above with the structure in the tank, beside the water: valid (the
     refusals come from the placement, not from something else in the scene)."""

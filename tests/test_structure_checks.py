@@ -124,6 +124,7 @@ def test_placement_in_the_tank_and_outside():
     assert placement_problems("b", np.array([[0.95, 0.0], [1.3, 0.1]]), tank) == []   # partly in a wall
     assert "under the floor" in placement_problems("b", np.array([[0.2, -2.0], [0.4, -1.0]]), tank)[0]
     assert "outside the tank" in placement_problems("b", np.array([[2.0, 0.0], [3.0, 0.1]]), tank)[0]
+    assert placement_problems("b", np.array([[0.2, 5.0], [0.4, 6.0]]), tank) == []       # open above
 
 
 def _solver(model: str):

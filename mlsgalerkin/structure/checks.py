@@ -48,9 +48,10 @@ integrate with :math:`|\det J|`. The geometry checked is the vertices' (the line
 element).
 
 **Placement** (:func:`placement_problems`, :func:`inside_surface`). The tank is the bounding box
-of the scene's fixed and moving wall particles (not those riding on a structure). A body with
-less than :data:`INSIDE_FRACTION` of its bounding box inside the tank's box is outside the tank
-(or under the floor, if its centre is below the tank's bottom); a closed body surface with fluid
+of the scene's fixed and moving wall particles (not those riding on a structure), open above. A
+body with less than :data:`INSIDE_FRACTION` of its bounding box inside the tank's box is outside
+the tank (or under the floor, if its centre is below the tank's bottom): a body partly inside a
+wall (a beam that closes the tank) is not; a closed body surface with fluid
 particles inside it overlaps the fluid (its mass would count twice).
 
 **Rotation** (:func:`rotation_operator`). Small-strain (linear) elasticity holds for rotations
@@ -296,10 +297,12 @@ def _jacobians(p: FloatArray, t: NDArray[np.int64], element: Any) -> tuple[Float
 # ------------------------------------------------------------------ placement
 def placement_problems(owner: str, nodes: FloatArray, tank: tuple[FloatArray, FloatArray]) -> list[str]:
     """``[message]`` if less than :data:`INSIDE_FRACTION` of the bounding box of ``nodes (n, d)``
-    (m) lies inside the box ``tank = (lower, upper)`` (m); "under the floor" if the body's centre
-    is below the tank's bottom (the last axis)."""
+    (m) lies inside the box ``tank = (lower, upper)`` (m) open above (the last axis is up: a body
+    above the walls' top, dropped from a height, is in the tank); "under the floor" if the body's
+    centre is below the tank's bottom."""
     lo, hi = nodes.min(axis=0), nodes.max(axis=0)
     t_lo, t_hi = tank
+    t_hi = np.append(t_hi[:-1], math.inf)
     extent = hi - lo
     overlap = np.clip(np.minimum(hi, t_hi) - np.maximum(lo, t_lo), 0.0, None)
     # a flat (zero-extent) direction counts as inside when it lies within the tank's range
@@ -308,7 +311,7 @@ def placement_problems(owner: str, nodes: FloatArray, tank: tuple[FloatArray, Fl
     if inside >= INSIDE_FRACTION:
         return []
     box = f"[{_fmt(lo)} .. {_fmt(hi)}] m"
-    tank_box = f"[{_fmt(t_lo)} .. {_fmt(t_hi)}] m"
+    tank_box = f"[{_fmt(t_lo)} .. {_fmt(tank[1])}] m, open above"
     if 0.5 * (lo[-1] + hi[-1]) < t_lo[-1]:
         return [f"{owner} lies under the floor: its box {box} is below the tank's bottom at {t_lo[-1]:g} m (the tank's "
                 f"walls span {tank_box}); move it up into the tank"]
@@ -321,7 +324,7 @@ def _fmt(x: FloatArray) -> str:
 
 
 def inside_surface(points: FloatArray, nodes: FloatArray, facets: NDArray[np.int64],
-                   chunk: int = 2_000_000) -> NDArray[np.bool_]:
+                   chunk: int = 500_000) -> NDArray[np.bool_]:
     """Which ``points (n, d)`` lie inside the closed surface of ``nodes (m, d)`` and ``facets
     (k, d)`` (2D segments, 3D triangles), by the winding number ``w = Σ θ/2π`` (2D: the angle
     each segment subtends) or ``w = Σ Ω/4π`` (3D: the solid angle of each triangle, Van
