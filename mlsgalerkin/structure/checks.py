@@ -77,10 +77,9 @@ from skfem import ElementHex1, ElementQuad1, ElementTetP1, ElementTriP1
 __all__ = [
     "BYTES_PER_ELEMENT", "INSIDE_FRACTION", "JACOBIAN_TOLERANCE", "KAPPA", "LINEAR_ROTATION_LIMIT",
     "MAX_STRUCTURE_SUBSTEPS", "POISSON_LIMITS", "SUBSTEP_FRACTION", "LargeRotationWarning", "dilatational_speed",
-    "element_limit", "element_problems", "explicit_step_estimate", "explicit_substep_problems", "inside_surface", "material_problems",
-    "mesh_size_problems", "node_spacing", "placement_problems", "poisson_problems", "rotation_operator", "rotation_warning",
-    "structure_scene_problems",
-    "substep_problems",
+    "element_limit", "element_problems", "explicit_step_estimate", "explicit_substep_problems", "inside_surface",
+    "material_problems", "mesh_size_problems", "node_spacing", "placement_problems", "poisson_problems",
+    "rotation_operator", "rotation_warning", "structure_scene_problems", "substep_problems",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -88,8 +87,8 @@ FloatArray = NDArray[np.float64]
 #: Poisson's ratio allowed (closed interval), a margin inside ``(-1, 0.5)`` (module docstring).
 POISSON_LIMITS = (-0.99, 0.499)
 #: Bytes per element while scikit-fem assembles the stiffness and mass (COO triplets of the
-#: element matrices, 24 bytes per entry, twice), by element name.
-BYTES_PER_ELEMENT = {"Q1": 4_000, "Q2": 16_000, "P1": 2_000, "Hex1": 28_000, "Hex2": 320_000}
+#: element matrices, 24 bytes per entry, twice), by element name (P1: the tetrahedron's).
+BYTES_PER_ELEMENT = {"Q1": 4_000, "Q2": 16_000, "P1": 7_000, "Hex1": 28_000, "Hex2": 320_000}
 #: ``ω_max h / c_d`` of the explicit step estimate (measured 2.0–3.3; module docstring).
 KAPPA = 3.0
 #: The sub-step a run takes as a fraction of ``2/ω_max`` (0.9 safety × 0.62 from the default
@@ -374,7 +373,8 @@ def overlap_problems(owner: str, nodes: FloatArray, facets: NDArray[np.int64], p
     if inside.size == 0:
         return []
     first = particles[inside[0]]
-    return [f"{owner} overlaps the fluid: {inside.size} particle{'s' if inside.size > 1 else ''} of {fluid!r} lie inside "
+    many = "s" if inside.size > 1 else ""
+    return [f"{owner} overlaps the fluid: {inside.size} particle{many} of {fluid!r} lie inside "
             f"it (the first at [{_fmt(first)}] m), so their mass would count twice; leave the structure's space out "
             "of the fluid block, or move the structure"]
 
