@@ -235,7 +235,8 @@ def element_problems(p: FloatArray, t: NDArray[np.int64], facets: NDArray[np.int
         return []
     nv = 3 if geometry is ElementTriP1 else 4 if geometry in (ElementQuad1, ElementTetP1) else 8
     t = t[:nv]
-    det, size = _jacobians(p, t, geometry())
+    chunks = [_jacobians(p, t[:, s:s + 20_000], geometry()) for s in range(0, t.shape[1], 20_000)]
+    det, size = np.concatenate([c[0] for c in chunks]), np.concatenate([c[1] for c in chunks])
     tol = JACOBIAN_TOLERANCE * size ** d
     folded = np.flatnonzero((det > tol[:, None]).any(axis=1) & (det < -tol[:, None]).any(axis=1))
     if folded.size:
