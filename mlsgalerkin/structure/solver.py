@@ -157,7 +157,7 @@ class StructureSolver(Solver):
         :data:`~mlsgalerkin.structure.checks.LINEAR_ROTATION_LIMIT`."""
         for name, R in list(self._rotation.items()):
             m = self._state.motions[name]
-            message = rotation_warning(f"ElasticBody {name!r}", R, m.u, m.body.dim, t)
+            message = rotation_warning(f"ElasticBody {name!r}", R, m.u, m.body.dim, t + dt)
             if message:
                 warnings.warn(message, LargeRotationWarning, stacklevel=2)
                 del self._rotation[name]
