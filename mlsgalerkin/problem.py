@@ -234,6 +234,9 @@ class PreparedProblem:
         """One line: particles, memory, frames and checkpoints of the run."""
         e = self.estimate
         elements = f", {e['structure_elements']:,} structure elements" if e.get("structure_elements") else ""
+        substeps = float(f"{e.get('structure_substeps', 0):.2g}")   # two significant digits
+        if substeps:
+            elements += f", about {substeps:,.0f} structure sub-steps"
         text = (f"{e['particles']:,} particles ({e['fluid_particles']:,} fluid){elements}, about "
                 f"{e['memory_mb']:,.0f} MB, {e['frames']} frames")
         ck = e.get("checkpoint_every_s")
@@ -255,7 +258,7 @@ def prepare_problem(problem: str | Path | ModuleType, overrides: dict[str, Any] 
     ``output`` overrides (``Output`` fields: ``every``, ``checkpoint_every``,
     ``checkpoint_wall_every``, …) and validate the scene."""
     from mlsgalerkin.fluid.bodies import FluidBody, particle_limit
-    from mlsgalerkin.structure.checks import BYTES_PER_ELEMENT, element_limit
+    from mlsgalerkin.structure.checks import BYTES_PER_ELEMENT, element_limit, substep_estimate
     mod = problem if isinstance(problem, ModuleType) else load_problem(problem)
     params = parse_overrides(mod.Parameters, overrides or {})
     problems = _finite_problems(params)
@@ -298,6 +301,8 @@ def prepare_problem(problem: str | Path | ModuleType, overrides: dict[str, Any] 
     memory = n * _BYTES_PER_PARTICLE.get(dim, 6000) + sum(k * BYTES_PER_ELEMENT.get(e, 16_000) for k, e in meshes)
     estimate = {"particles": n, "fluid_particles": fluid, "memory_mb": memory / 1e6,
                 "structure_elements": sum(k for k, _ in meshes),
+                "structure_substeps": max([scene.t_end / s for s in map(substep_estimate, scene.bodies) if s],
+                                          default=0),
                 "frames": frames if o.vtu else 0,
                 "checkpoint_every_s": o.checkpoint_every if o.checkpoint_every is not None else scene.t_end / 10,
                 "checkpoint_wall_every_s": o.checkpoint_wall_every}

@@ -338,6 +338,8 @@ def test_the_shipped_structure_problems_pass_check():
     for name in ("elastic_gate", "beam_clamped", "beam_on_spring", "hydrostatic_plate", "wedge_drop"):
         code, text = run_cli(["run", name, "--check"])
         assert code == 0, text
+        if name in ("elastic_gate", "beam_clamped", "beam_on_spring"):   # explicit or sub-cycled: the count shown
+            assert "structure sub-steps" in text, text
 
 
 def test_a_huge_mesh_is_refused_before_it_is_built(monkeypatch):

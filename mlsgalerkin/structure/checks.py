@@ -79,7 +79,7 @@ __all__ = [
     "MAX_STRUCTURE_SUBSTEPS", "POISSON_LIMITS", "SUBSTEP_FRACTION", "LargeRotationWarning", "dilatational_speed",
     "element_limit", "element_problems", "explicit_step_estimate", "explicit_substep_problems", "inside_surface",
     "material_problems", "mesh_size_problems", "node_spacing", "placement_problems", "poisson_problems",
-    "rotation_operator", "rotation_warning", "structure_scene_problems", "substep_problems",
+    "rotation_operator", "rotation_warning", "structure_scene_problems", "substep_estimate", "substep_problems",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -473,25 +473,36 @@ def _outline(body: Any) -> tuple[FloatArray, NDArray[np.int64]] | None:
     return np.asarray(surface.nodes, dtype=float), np.asarray(surface.facets, dtype=np.int64)
 
 
-def _run_length_problems(owner: str, body: Any, t_end: float) -> list[str]:
+def substep_estimate(body: Any) -> float | None:
+    """The sub-step (s) a run of the structure ``body`` is estimated to take (module docstring):
+    ``SUBSTEP_FRACTION · 2h/(κ c_d)`` for an explicit elastic body, ``0.05/ω`` for a hinged
+    (``ω_n``) or spinning (``|ω|``) rigid body; ``None`` where the step is the outer one (Newmark,
+    a rigid body at rest without a spring)."""
     mesh = getattr(body, "mesh", None)
     if mesh is not None:
         if getattr(body, "integrator", "explicit") != "explicit":
-            return []
+            return None
         m = body.material
         spacing = node_spacing(mesh.p, mesh.t, quadratic=body.element in ("Q2", "Hex2"))
         if not spacing > 0:
-            return []
-        step = SUBSTEP_FRACTION * explicit_step_estimate(m.young, m.poisson, m.density, spacing, dim=mesh.p.shape[0],
-                                                         plane=m.plane)
-        return substep_problems(owner, t_end, step, "lower young, raise the element size (fewer elements), shorten "
-                                                    "t_end, or use integrator='newmark' (linear model)")
+            return None
+        return SUBSTEP_FRACTION * explicit_step_estimate(m.young, m.poisson, m.density, spacing,
+                                                         dim=mesh.p.shape[0], plane=m.plane)
     omega = 0.0
     if hasattr(getattr(body, "constraint", None), "stiffness"):               # a Hinge
         omega = math.sqrt(max(body.natural_frequency_squared(), 0.0))
     spin = float(np.linalg.norm(np.atleast_1d(getattr(body, "angular_velocity", 0.0))))
     omega = max(omega, spin)
-    if omega <= 0:
+    return RIGID_PHASE / omega if omega > 0 else None
+
+
+def _run_length_problems(owner: str, body: Any, t_end: float) -> list[str]:
+    step = substep_estimate(body)
+    if step is None:
         return []
-    return substep_problems(owner, t_end, RIGID_PHASE / omega, "lower the hinge stiffness or the spin, or raise the "
-                                                                "inertia (check the units: N m/rad, kg m², rad/s)")
+    if getattr(body, "mesh", None) is not None:
+        fix = ("lower young, raise the element size (fewer elements), shorten t_end, or use integrator='newmark' "
+               "(linear model)")
+    else:
+        fix = "lower the hinge stiffness or the spin, or raise the inertia (check the units: N m/rad, kg m², rad/s)"
+    return substep_problems(owner, t_end, step, fix)
