@@ -168,7 +168,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
             overrides["gif"] = "false"
         if args.frame_every is not None and "frame_every" in fields:
             overrides["frame_every"] = args.frame_every
-        prepared = prepare_problem(module, overrides, output=output, max_particles=args.max_particles)
+        prepared = prepare_problem(module, overrides, output=output, max_particles=args.max_particles,
+                                   max_elements=args.max_elements)
         prepared.origin = origin_of(args.problem)
         print(f"{name}: {prepared.describe()}", flush=True)
         if args.check:
@@ -287,6 +288,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="wall-clock seconds between checkpoints (default 120)")
     p.add_argument("--max-particles", type=_positive_count, default=2_000_000, metavar="N",
                    help="refuse scenes with more particles than this, before building them (default 2e6)")
+    p.add_argument("--max-elements", type=_positive_count, default=200_000, metavar="N",
+                   help="refuse structure meshes with more elements than this, before building them (default 2e5)")
     p.add_argument("--no-gif", action="store_true", help="skip the animation")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.set_defaults(func=_cmd_run)

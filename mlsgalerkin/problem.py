@@ -42,6 +42,7 @@ from types import ModuleType
 from typing import Any, NamedTuple
 
 __all__ = [
+    "DEFAULT_MAX_ELEMENTS",
     "DEFAULT_MAX_PARTICLES",
     "ParameterHelp",
     "PreparedProblem",
@@ -64,6 +65,10 @@ __all__ = [
 #: The largest scene ``mlsgalerkin run`` builds unless ``--max-particles`` raises it: a 2D step of
 #: that many particles takes about a second on two cores, and the run needs about 4 GB.
 DEFAULT_MAX_PARTICLES = 2_000_000
+#: The largest structure mesh ``mlsgalerkin run`` lets scikit-fem assemble unless ``--max-elements``
+#: raises it: 2e5 2D Q2 elements take about 3 GB and several minutes to assemble
+#: (:mod:`mlsgalerkin.structure.checks`).
+DEFAULT_MAX_ELEMENTS = 200_000
 #: Bytes per particle of a running scene (state, neighbour and shape tables, temporaries).
 _BYTES_PER_PARTICLE = {2: 2_000, 3: 6_000}
 
@@ -228,8 +233,12 @@ class PreparedProblem:
     def describe(self) -> str:
         """One line: particles, memory, frames and checkpoints of the run."""
         e = self.estimate
-        text = (f"{e['particles']:,} particles ({e['fluid_particles']:,} fluid), about {e['memory_mb']:,.0f} MB, "
-                f"{e['frames']} frames")
+        elements = f", {e['structure_elements']:,} structure elements" if e.get("structure_elements") else ""
+        substeps = float(f"{e.get('structure_substeps', 0):.2g}")   # two significant digits
+        if substeps:
+            elements += f", about {substeps:,.0f} structure sub-steps"
+        text = (f"{e['particles']:,} particles ({e['fluid_particles']:,} fluid){elements}, about "
+                f"{e['memory_mb']:,.0f} MB, {e['frames']} frames")
         ck = e.get("checkpoint_every_s")
         wall = e.get("checkpoint_wall_every_s")
         if ck or wall:
@@ -240,26 +249,30 @@ class PreparedProblem:
 
 def prepare_problem(problem: str | Path | ModuleType, overrides: dict[str, Any] | None = None, *,
                     output: dict[str, Any] | None = None, max_particles: int | None = DEFAULT_MAX_PARTICLES,
-                    ) -> PreparedProblem:
+                    max_elements: int | None = DEFAULT_MAX_ELEMENTS) -> PreparedProblem:
     """Everything before the first step, with every mistake reported before any work: load the
     problem, read and check its parameters (types, finiteness, the problem's ``check``), build
     its scene within ``max_particles`` (a lattice larger than that is refused before it is
-    allocated), apply ``output`` overrides (``Output`` fields: ``every``, ``checkpoint_every``,
+    allocated) and ``max_elements`` (a structure mesh larger than that is refused by the
+    problem's ``check`` before it is built, and by ``ElasticBody`` before it is assembled), apply
+    ``output`` overrides (``Output`` fields: ``every``, ``checkpoint_every``,
     ``checkpoint_wall_every``, …) and validate the scene."""
     from mlsgalerkin.fluid.bodies import FluidBody, particle_limit
+    from mlsgalerkin.structure.checks import BYTES_PER_ELEMENT, element_limit, substep_estimate
     mod = problem if isinstance(problem, ModuleType) else load_problem(problem)
     params = parse_overrides(mod.Parameters, overrides or {})
     problems = _finite_problems(params)
     check = getattr(mod, "check", None)
     if callable(check) and not problems:
-        problems = list(check(params))
+        with element_limit(max_elements):
+            problems = list(check(params))
     if problems:
         lines = "\n".join(f"  - {p}" for p in problems)
         raise ProblemError(f"{len(problems)} problem{'s' if len(problems) > 1 else ''} with the parameters:\n{lines}")
     from mlsgalerkin.scene import Scene
 
     try:
-        with particle_limit(max_particles):
+        with particle_limit(max_particles), element_limit(max_elements):
             scene = mod.make_scene(params)
     except (ValueError, ArithmeticError) as exc:  # a make_scene that could not build: say so, not a traceback
         raise ProblemError(f"could not build the scene with these parameters: {exc}") from exc
@@ -284,7 +297,12 @@ def prepare_problem(problem: str | Path | ModuleType, overrides: dict[str, Any] 
     else:
         frames = 2
     fluid = sum(b.n for b in scene.bodies if isinstance(b, FluidBody))
-    estimate = {"particles": n, "fluid_particles": fluid, "memory_mb": n * _BYTES_PER_PARTICLE.get(dim, 6000) / 1e6,
+    meshes = [(b.mesh.t.shape[1], b.element) for b in scene.bodies if hasattr(b, "mesh") and hasattr(b, "element")]
+    memory = n * _BYTES_PER_PARTICLE.get(dim, 6000) + sum(k * BYTES_PER_ELEMENT.get(e, 16_000) for k, e in meshes)
+    estimate = {"particles": n, "fluid_particles": fluid, "memory_mb": memory / 1e6,
+                "structure_elements": sum(k for k, _ in meshes),
+                "structure_substeps": max([scene.t_end / s for s in map(substep_estimate, scene.bodies) if s],
+                                          default=0),
                 "frames": frames if o.vtu else 0,
                 "checkpoint_every_s": o.checkpoint_every if o.checkpoint_every is not None else scene.t_end / 10,
                 "checkpoint_wall_every_s": o.checkpoint_wall_every}
@@ -311,7 +329,7 @@ def origin_of(problem: str | Path | ModuleType) -> dict[str, Any]:
 def run_problem(problem: str | Path | ModuleType, overrides: dict[str, Any] | None = None,
                 out: str | Path | None = None, *, progress: bool = True, restart: str | Path | None = None,
                 overwrite: bool = False, allow_changes: bool = False, output: dict[str, Any] | None = None,
-                max_particles: int | None = DEFAULT_MAX_PARTICLES):
+                max_particles: int | None = DEFAULT_MAX_PARTICLES, max_elements: int | None = DEFAULT_MAX_ELEMENTS):
     """Build problem ``problem`` (name, file or module) with ``overrides``, run it, analyse it.
 
     Everything is checked before the first step (:func:`prepare_problem`). ``restart``,
@@ -322,7 +340,8 @@ def run_problem(problem: str | Path | ModuleType, overrides: dict[str, Any] | No
     """
     from mlsgalerkin.simulation import Simulation
 
-    prepared = prepare_problem(problem, overrides, output=output, max_particles=max_particles)
+    prepared = prepare_problem(problem, overrides, output=output, max_particles=max_particles,
+                               max_elements=max_elements)
     analyse = getattr(prepared.module, "analyse", None)
     params = prepared.params
     result = Simulation(prepared.scene).run(

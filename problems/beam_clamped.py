@@ -48,6 +48,7 @@ from mlsgalerkin.problem import (
 )
 from mlsgalerkin.scene import Output, Probe, Scene
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial
+from mlsgalerkin.structure.checks import explicit_substep_problems, mesh_size_problems, poisson_problems
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "SMOKE", "euler_bernoulli_period"]
 
@@ -197,7 +198,8 @@ def check(p: Parameters) -> list[str]:
     out += require_nonnegative(p, "alpha", "delta", "wall_acceleration")
     out += require(p.wall_acceleration <= 1.0, f"wall_acceleration is a share in [0, 1], got {p.wall_acceleration!r}")
     out += require(isinstance(p.iterations, int) and p.iterations >= 1, f"iterations must be >= 1, got {p.iterations!r}")
-    out += require(-1.0 < p.poisson < 0.5, f"poisson must be in (-1, 0.5), got {p.poisson!r}")
+    out += poisson_problems(p.poisson, "the beam's material")
+    out += mesh_size_problems(p.elements, "the beam's mesh")
     out += require(p.integrator in ("explicit", "newmark"), f"integrator must be explicit or newmark, got {p.integrator!r}")
     out += require(p.shifting in SHIFTING_MODES, f"shifting must be one of {SHIFTING_MODES}, got {p.shifting!r}")
     out += require(p.negative_pressure in NEGATIVE_PRESSURE_MODES,
@@ -212,4 +214,8 @@ def check(p: Parameters) -> list[str]:
         out += require(min(p.column_width, p.column_height) >= 4 * p.dx,
                        f"dx = {p.dx:g} m leaves fewer than 4 particles across the column; choose dx <= "
                        f"{min(p.column_width, p.column_height) / 4:g} m")
+        if p.integrator == "explicit":   # Q2 elements, one through the thickness
+            out += explicit_substep_problems("the beam", p.young, p.poisson, p.rho_beam,
+                                             0.5 * min(p.thickness, p.beam_height / p.elements), p.t_end,
+                                             plane="stress")
     return out

@@ -63,6 +63,7 @@ from mlsgalerkin.problem import (
 )
 from mlsgalerkin.scene import Output, Probe, Scene
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial
+from mlsgalerkin.structure.checks import explicit_substep_problems, mesh_size_problems, poisson_problems
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "load_reference", "static_tip", "SMOKE"]
 
@@ -217,7 +218,8 @@ def check(p: Parameters) -> list[str]:
                            "frame_every")
     out += require_nonnegative(p, "alpha", "delta")
     out += require(isinstance(p.iterations, int) and p.iterations >= 1, f"iterations must be >= 1, got {p.iterations!r}")
-    out += require(-1.0 < p.poisson < 0.5, f"poisson must be in (-1, 0.5), got {p.poisson!r}")
+    out += poisson_problems(p.poisson, "the gate's material")
+    out += mesh_size_problems(2 * p.elements, "the gate's mesh (2 × elements)")
     out += require(p.model in ("neo_hookean", "stvenant_kirchhoff", "linear"),
                    f"model must be neo_hookean, stvenant_kirchhoff or linear, got {p.model!r}")
     out += require(p.shifting in SHIFTING_MODES, f"shifting must be one of {SHIFTING_MODES}, got {p.shifting!r}")
@@ -232,4 +234,7 @@ def check(p: Parameters) -> list[str]:
                        "stand outside it; choose dx <= the thickness")
         out += require(min(p.column_width, p.gate_length) >= 4 * p.dx,
                        f"dx = {p.dx:g} m leaves fewer than 4 particles across the column or along the gate")
+        # Q2 elements, two through the thickness: the smallest node spacing is half an element's side
+        out += explicit_substep_problems("the gate", p.young, p.poisson, p.rho_gate,
+                                         0.5 * min(0.5 * p.thickness, p.gate_length / p.elements), p.t_end)
     return out

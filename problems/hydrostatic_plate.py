@@ -40,6 +40,7 @@ from mlsgalerkin.interactions import StructureCoupling
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial
+from mlsgalerkin.structure.checks import explicit_substep_problems, mesh_size_problems, poisson_problems
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "SMOKE", "plate_theory"]
 
@@ -164,8 +165,13 @@ def check(p: Parameters) -> list[str]:
     out = require_positive(p, "depth", "length", "thickness", "young", "rho_plate", "rho", "dx", "elements", "t_end",
                            "c0_factor", "g", "frame_every")
     out += require_nonnegative(p, "alpha")
-    out += require(-1.0 < p.poisson < 0.5, f"poisson must be in (-1, 0.5), got {p.poisson!r}")
+    out += poisson_problems(p.poisson, "the plate's material")
+    out += mesh_size_problems(2 * p.elements, "the plate's mesh (2 × elements)")
+    out += require(p.integrator in ("newmark", "explicit"), f"integrator must be newmark or explicit, got {p.integrator!r}")
     if not out:
+        if p.integrator == "explicit":   # Q2 elements, two through the thickness
+            out += explicit_substep_problems("the plate", p.young, p.poisson, p.rho_plate,
+                                             0.5 * min(0.5 * p.thickness, p.length / p.elements), p.t_end)
         out += require(min(p.depth, p.length) >= 4 * p.dx,
                        f"dx = {p.dx:g} m leaves fewer than 4 particles across the water; choose dx <= "
                        f"{min(p.depth, p.length) / 4:g} m")

@@ -68,6 +68,7 @@ from threadpoolctl import threadpool_limits
 
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.dynamics import Body
+from mlsgalerkin.structure.checks import element_problems, material_problems, mesh_size_problems
 
 __all__ = ["ARPACK_SEED", "ELEMENTS", "ELEMENTS_3D", "INTEGRATORS", "MODELS", "STRUCTURE_SOLVER", "ElasticBody",
            "ElasticMaterial", "WetSurface", "arpack_eigenvalue"]
@@ -115,11 +116,9 @@ class ElasticMaterial:
     plane: str = "strain"
 
     def __post_init__(self) -> None:
-        if not (self.young > 0 and self.density > 0):
-            raise ValueError(f"ElasticMaterial: young and density must be positive, got {self.young!r}, "
-                             f"{self.density!r}")
-        if not (-1.0 < self.poisson < 0.5):
-            raise ValueError(f"ElasticMaterial: poisson must be in (-1, 0.5), got {self.poisson!r}")
+        problems = material_problems(self.young, self.poisson, self.density)
+        if problems:
+            raise ValueError("; ".join(problems))
         if self.plane not in ("strain", "stress"):
             raise ValueError(f"ElasticMaterial: plane must be 'strain' or 'stress', got {self.plane!r}")
 
@@ -294,9 +293,18 @@ class ElasticBody(Body):
             raise ValueError(f"{owner}: mesh must be a 2D or 3D scikit-fem mesh (MeshQuad, MeshTri, MeshHex, MeshTet), "
                              f"got {type(mesh).__name__}")
         d = mesh.p.shape[0]
+        # before scikit-fem sees the mesh: its size, non-finite nodes, degenerate, folded or inverted elements
+        problems = mesh_size_problems(mesh.t.shape[1], f"{owner}: the mesh") or element_problems(
+            mesh.p, mesh.t, mesh.facets, mesh.f2t, owner=f"{owner}: the mesh")
+        if problems:
+            raise ValueError(problems[0])
         table = ELEMENTS if d == 2 else ELEMENTS_3D
         if element not in table:
             raise ValueError(f"{owner}: element must be one of {sorted(table)} for a {d}D mesh, got {element!r}")
+        if table[element].refdom is not type(mesh).elem.refdom:
+            fits = sorted(k for k, e in table.items() if e.refdom is type(mesh).elem.refdom)
+            raise ValueError(f"{owner}: element {element!r} does not fit a {type(mesh).__name__} (its cells are "
+                             f"{type(mesh).elem.refdom.__name__[3:].lower()}s); use {' or '.join(fits)}")
         if not isinstance(material, ElasticMaterial):
             raise TypeError(f"{owner}: material must be an ElasticMaterial, got {type(material).__name__}")
         if model not in MODELS:

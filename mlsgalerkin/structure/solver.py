@@ -30,6 +30,7 @@ surface nodes (rigid) with displacement, velocity and the body index.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -37,6 +38,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mlsgalerkin.dynamics import Body, Diagnosis, SceneView, Solver, Surface
+from mlsgalerkin.structure.checks import (
+    LargeRotationWarning,
+    rotation_operator,
+    rotation_warning,
+    structure_scene_problems,
+)
 from mlsgalerkin.structure.elastic import ElasticBody
 from mlsgalerkin.structure.rigid import RigidBody
 from mlsgalerkin.structure.scheme import StructureScheme
@@ -169,11 +176,16 @@ class StructureSolver(Solver):
             if isinstance(b, ElasticBody) and b.clamped_dofs.size == 0 and b.integrator == "newmark":
                 out.append(f"ElasticBody {b.name!r}: Newmark needs a clamped boundary (the free body's stiffness is "
                            "singular); give clamped= or use the explicit integrator")
+        out += structure_scene_problems([b for b in bodies if isinstance(b, (ElasticBody, RigidBody))],
+                                        [b for b in scene.bodies if all(b is not s for s in bodies)], t_end=scene.t_end)
         return out
 
     def __init__(self, bodies: list[Body], scheme: StructureScheme, scene: SceneView) -> None:
         self.scheme = scheme
         self._state = StructureState({b.name: stepper_for(b) for b in bodies})
+        # linear bodies watched for rotations beyond small-strain theory (a warning, once per body)
+        self._rotation = {b.name: rotation_operator(b.basis) for b in bodies
+                          if isinstance(b, ElasticBody) and b.model == "linear"}
 
     @property
     def state(self) -> StructureState:
@@ -193,7 +205,16 @@ class StructureSolver(Solver):
             m.advance(dt)
 
     def end_step(self, t: float, dt: float) -> None:
-        """Nothing: the forces of this step's exchanges drive the next step's ``begin_step``."""
+        """Nothing to advance: the forces of this step's exchanges drive the next step's
+        ``begin_step``. Warns (:class:`~mlsgalerkin.structure.checks.LargeRotationWarning`, once
+        per body) when a linear body's largest element rotation exceeds
+        :data:`~mlsgalerkin.structure.checks.LINEAR_ROTATION_LIMIT`."""
+        for name, R in list(self._rotation.items()):
+            m = self._state.motions[name]
+            message = rotation_warning(f"ElasticBody {name!r}", R, m.u, m.body.dim, t + dt)
+            if message:
+                warnings.warn(message, LargeRotationWarning, stacklevel=2)
+                del self._rotation[name]
 
     def surface(self, body: str) -> Surface:
         return self._state.motions[body].surface()
