@@ -512,7 +512,7 @@ def _block_at(x, y, **kw):
 
 
 def _scene_2d(structure):
-    return Scene([_water(), _tank_2d(), structure], [TaitPressure(10.0), Walls()], t_end=0.1)
+    return Scene([_water(), _tank_2d(), structure], [FluidScheme([TaitPressure(10.0), Walls()])], t_end=0.1)
 
 
 def _tank_3d():
@@ -549,7 +549,7 @@ def _rigid_3d(lower, upper, **kw):
 
 def _scene_3d(structure):
     water = FluidBody.block("water", (0.0, 0.0, 0.0), (0.05, 0.1, 0.05), 0.01, [Phase("water", 1000.0)])
-    return Scene([water, _tank_3d(), structure], [TaitPressure(10.0), Walls()], t_end=0.1)
+    return Scene([water, _tank_3d(), structure], [FluidScheme([TaitPressure(10.0), Walls()])], t_end=0.1)
 
 
 STRUCTURE_SCENE_CASES = [

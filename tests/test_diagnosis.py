@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from skfem import MeshQuad
 
+from mlsgalerkin.structure.scheme import StructureScheme
 from mlsgalerkin.dynamics import Diagnosis, SystemState
 from mlsgalerkin.io import load_checkpoint
 from mlsgalerkin.monitors import SimulationDiverged, Watchdog
@@ -41,7 +42,7 @@ def poison_after(sim: Simulation, name: str, steps: int, poison) -> None:
 
 def test_an_elastic_body_that_diverges_first_ends_the_run_diverged_naming_it(tmp_path):
     b = plate()
-    sim = Simulation(Scene([b], [], t_end=0.01, dt_max=1e-3, watchdog=Watchdog(keep_every=2)))
+    sim = Simulation(Scene([b], [StructureScheme(dt_max=1e-3)], t_end=0.01, watchdog=Watchdog(keep_every=2)))
     dof = 5
     node = int(np.flatnonzero((b.basis.nodal_dofs == dof).any(axis=0))[0])
 
@@ -76,7 +77,7 @@ def test_a_structure_displaced_past_the_watchdog_limit_is_stopped():
         m.u[5] = 7.0
 
     def run(watchdog):
-        sim = Simulation(Scene([plate()], [], t_end=0.005, dt_max=1e-3, watchdog=watchdog))
+        sim = Simulation(Scene([plate()], [StructureScheme(dt_max=1e-3)], t_end=0.005, watchdog=watchdog))
         poison_after(sim, "plate", 2, shove)
         return sim.run(progress=False)
 
@@ -86,13 +87,13 @@ def test_a_structure_displaced_past_the_watchdog_limit_is_stopped():
     rec = info.value.record
     assert rec.body == "plate" and rec.limit == 0.5 and rec.step == 2 and max(abs(v) for v in rec.value) == 7.0
     with pytest.raises(SceneError, match="watchdog.max_displacement must be positive"):
-        Simulation(Scene([plate()], [], t_end=0.005, dt_max=1e-3, watchdog=Watchdog(max_displacement=-1.0)))
+        Simulation(Scene([plate()], [StructureScheme(dt_max=1e-3)], t_end=0.005, watchdog=Watchdog(max_displacement=-1.0)))
 
 
 def test_a_rigid_body_that_diverges_is_named():
     beam = RigidBody.beam("beam", base=(0.0, 0.0), length=1.0, mass=1.0, thickness=0.02,
                           constraint=Hinge((0.0, 0.0), stiffness=100.0))
-    sim = Simulation(Scene([plate(), beam], [], t_end=0.01, dt_max=1e-3))
+    sim = Simulation(Scene([plate(), beam], [StructureScheme(dt_max=1e-3)], t_end=0.01))
 
     def poison(m):
         m.theta = np.nan
@@ -109,7 +110,7 @@ def test_every_shipped_solver_state_is_a_system_state():
     mod = load_problem("dam_break")
     sim = Simulation(mod.make_scene(mod.Parameters(dx=0.04, t_end=0.001)))
     assert isinstance(sim.state.fluid, SystemState)
-    assert isinstance(Simulation(Scene([plate()], [], t_end=0.01, dt_max=1e-3)).state.systems["structure"],
+    assert isinstance(Simulation(Scene([plate()], [StructureScheme(dt_max=1e-3)], t_end=0.01)).state.systems["structure"],
                       SystemState)
 
 
@@ -118,7 +119,7 @@ def test_a_state_that_is_not_a_system_state_is_refused_with_what_it_lacks(monkey
 
     monkeypatch.setattr(StructureSolver, "state", property(lambda self: object()))
     with pytest.raises(TypeError, match=r"StructureSolver.state is a object, which lacks .*health\(limits\)"):
-        Simulation(Scene([plate()], [], t_end=0.01, dt_max=1e-3))
+        Simulation(Scene([plate()], [StructureScheme(dt_max=1e-3)], t_end=0.01))
 
 
 def test_a_health_that_returns_a_plain_dict_still_stops_the_run_with_a_deprecation_warning(monkeypatch):
@@ -127,7 +128,7 @@ def test_a_health_that_returns_a_plain_dict_still_stops_the_run_with_a_deprecati
     monkeypatch.setattr(StructureState, "health",
                         lambda self, limits: {"quantity": "stress", "body": "plate", "hint": "h"}
                         if self.motions["plate"].outer_steps >= 2 else None)
-    sim = Simulation(Scene([plate()], [], t_end=0.01, dt_max=1e-3))
+    sim = Simulation(Scene([plate()], [StructureScheme(dt_max=1e-3)], t_end=0.01))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         with pytest.raises(SimulationDiverged, match="at step 2 .*structure body 'plate' — stress is unsound"):

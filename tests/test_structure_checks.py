@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from skfem import MeshHex, MeshQuad, MeshTet, MeshTri
 
+from mlsgalerkin.structure.scheme import StructureScheme
 from mlsgalerkin.problem import load_problem
 from mlsgalerkin.scene import Scene
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial
@@ -133,8 +134,8 @@ def _solver(model: str):
     mesh = MeshQuad.init_tensor(np.linspace(0.0, 1.0, 11), np.linspace(0.0, 0.1, 3))
     body = ElasticBody("bar", mesh, ElasticMaterial(1e7, 0.3, 1000.0), "Q1", clamped=lambda x: np.isclose(x[0], 0.0),
                        model=model)
-    scene = Scene([body], [], t_end=0.1, dt_max=1e-3)
-    solver = StructureSolver([body], scene)
+    scene = Scene([body], [StructureScheme(dt_max=1e-3)], t_end=0.1)
+    solver = StructureSolver([body], scene.schemes[0], scene.view())
     return solver, solver.state.body("bar")
 
 

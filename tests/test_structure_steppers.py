@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from skfem import MeshQuad
 
+from mlsgalerkin.structure.scheme import StructureScheme
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.scene import Scene
 from mlsgalerkin.simulation import Simulation
@@ -48,7 +49,7 @@ def test_two_identical_runs_of_an_explicit_elastic_body_are_bit_for_bit(make):
     """Sub-cycled central differences with the default high-mode damping (which depends on
     ``ω_max``), sagging under its weight: every time-series column and the summary's numbers
     agree exactly."""
-    runs = [Simulation(Scene([make()], [], t_end=0.01, dt_max=5e-4)).run(progress=False) for _ in range(2)]
+    runs = [Simulation(Scene([make()], [StructureScheme(dt_max=5e-4)], t_end=0.01)).run(progress=False) for _ in range(2)]
     first, second = (r.timeseries for r in runs)
     assert list(first) == list(second)
     name = make().name
@@ -107,7 +108,7 @@ def test_an_explicit_elastic_body_with_high_mode_damping_restarts_bit_for_bit(tm
     stepper and ``ω_max`` made again), the gate ends in exactly the state of the run that never
     stopped."""
     def scene():
-        return Scene([gate_like()], [], t_end=0.01, dt_max=5e-4)
+        return Scene([gate_like()], [StructureScheme(dt_max=5e-4)], t_end=0.01)
 
     straight = Simulation(scene()).run(progress=False)
     Simulation(scene()).run(out=tmp_path, progress=False, max_steps=7)

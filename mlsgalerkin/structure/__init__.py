@@ -3,7 +3,7 @@
 =============================================  ================================================
 module                                         contents
 =============================================  ================================================
-:mod:`~mlsgalerkin.structure.elastic`          :class:`ElasticMaterial`, :class:`ElasticBody`:
+:mod:`~mlsgalerkin.structure.elastic`          :class:`ElasticBody` (its :class:`ElasticMaterial` in :mod:`~mlsgalerkin.structure.material`):
                                                a scikit-fem mesh and element, stiffness, lumped
                                                mass, clamped facets, weight, the wet surface
 :mod:`~mlsgalerkin.structure.rigid`            :class:`RigidBody`, :class:`Hinge`: mass,

@@ -63,12 +63,13 @@ from skfem import (
     solve,
 )
 from skfem.helpers import dot
-from skfem.models.elasticity import lame_parameters, linear_elasticity
+from skfem.models.elasticity import linear_elasticity
 from threadpoolctl import threadpool_limits
 
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.dynamics import Body
-from mlsgalerkin.structure.checks import element_problems, material_problems, mesh_size_problems
+from mlsgalerkin.structure.checks import element_problems, mesh_size_problems
+from mlsgalerkin.structure.material import ElasticMaterial
 
 __all__ = ["ARPACK_SEED", "ELEMENTS", "ELEMENTS_3D", "INTEGRATORS", "MODELS", "STRUCTURE_SOLVER", "ElasticBody",
            "ElasticMaterial", "WetSurface", "arpack_eigenvalue"]
@@ -103,50 +104,6 @@ def arpack_eigenvalue(A: sp.spmatrix, **options: object) -> float:
     seeded = {"rng": rng} if _EIGSH_TAKES_RNG else {}
     with threadpool_limits(limits=1, user_api="blas"):
         return float(eigsh(A, k=1, v0=v0, return_eigenvectors=False, **seeded, **options)[0])
-
-
-@dataclass(frozen=True)
-class ElasticMaterial:
-    """Young's modulus ``young`` (Pa), Poisson's ratio ``poisson`` (–), density ``density``
-    (kg/m³) and the 2D assumption ``plane`` (``"strain"`` or ``"stress"``)."""
-
-    young: float
-    poisson: float
-    density: float
-    plane: str = "strain"
-
-    def __post_init__(self) -> None:
-        problems = material_problems(self.young, self.poisson, self.density)
-        if problems:
-            raise ValueError("; ".join(problems))
-        if self.plane not in ("strain", "stress"):
-            raise ValueError(f"ElasticMaterial: plane must be 'strain' or 'stress', got {self.plane!r}")
-
-    def lame(self, dim: int = 2) -> tuple[float, float]:
-        r"""``(λ, μ)`` in Pa of the material in a ``dim``-dimensional body: the one conversion from
-        Young's modulus and Poisson's ratio,
-
-        .. math:: \lambda = \frac{E\nu}{(1 + \nu)(1 - 2\nu)},\qquad \mu = \frac{E}{2(1 + \nu)}
-
-        (``skfem.models.elasticity.lame_parameters``), in 3D and in 2D plane strain; in 2D plane
-        stress ``λ`` becomes :math:`2\lambda\mu/(\lambda + 2\mu)` (``plane`` applies in 2D only)."""
-        if dim not in (2, 3):
-            raise ValueError(f"ElasticMaterial.lame: a body is 2D or 3D, got dim={dim!r}")
-        lam, mu = lame_parameters(self.young, self.poisson)
-        if dim == 2 and self.plane == "stress":
-            lam = 2.0 * lam * mu / (lam + 2.0 * mu)
-        return lam, mu
-
-    def lame3d(self) -> tuple[float, float]:
-        """Deprecated: ``lame(3)``."""
-        warnings.warn("ElasticMaterial.lame3d() is deprecated; use ElasticMaterial.lame(3)", DeprecationWarning,
-                      stacklevel=2)
-        return self.lame(3)
-
-    def wave_speed(self) -> float:
-        """Dilatational wave speed ``sqrt((λ + 2μ)/ρ)`` (m/s) of the 2D model."""
-        lam, mu = self.lame()
-        return math.sqrt((lam + 2.0 * mu) / self.density)
 
 
 @dataclass(frozen=True, eq=False)

@@ -86,7 +86,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
@@ -97,8 +96,7 @@ from skfem import BilinearForm, ElementVector, Functional, LinearForm, asm
 from skfem.assembly.basis import AbstractBasis
 from skfem.helpers import ddot, det, grad, identity, inv, mul, trace, transpose
 
-if TYPE_CHECKING:   # a leaf module: elastic.py may import this one without a cycle
-    from mlsgalerkin.structure.elastic import ElasticMaterial
+from mlsgalerkin.structure.material import ElasticMaterial
 
 __all__ = [
     "MODELS",
