@@ -48,7 +48,7 @@ def tank(rows: int):
         scene = sr.make_scene(p)
         sim = Simulation(scene)
         sim.start()
-    effect = next(e for e in scene.effects if isinstance(e, ConsistentIntegration))
+    effect = next(e for e in scene.schemes[0].effects if isinstance(e, ConsistentIntegration))
     return sim.state.fluid, effect
 
 

@@ -140,7 +140,7 @@ def dam_break(ratio: int, penalty: bool):
         k = next(i for i, b in enumerate(scene.bodies) if isinstance(b, WallBody))
         scene.bodies[k] = wall_box((0.0, 0.0), (p.tank_length_factor * p.column_width, 2.8 * p.column_width), p.dx,
                                    layers=3, reference_density=p.rho, surface=True)
-        scene.effects.append(PenaltyWalls())
+        scene.schemes[0].effects.append(PenaltyWalls())
     sim = Simulation(scene)
     sim.start()
     for _ in range(WARMUP_STEPS):

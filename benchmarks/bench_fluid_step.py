@@ -120,7 +120,7 @@ def make_simulation(ratio: int, skin: float | None = None):
     p = Parameters()
     scene = make_scene(Parameters(dx=p.column_width / ratio))
     if skin is not None:
-        scene.approximation = dataclasses.replace(scene.approximation, skin=skin)
+        scene.schemes[0].approximation = dataclasses.replace(scene.schemes[0].approximation, skin=skin)
     return Simulation(scene)
 
 

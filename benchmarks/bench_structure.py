@@ -84,7 +84,7 @@ def nonlinear(rows: list[str]) -> None:
 
     from mlsgalerkin.structure import ElasticBody, ElasticMaterial
     from mlsgalerkin.structure.hyperelastic import lame_for_dimension
-    from mlsgalerkin.structure.integrators import NONLINEAR_ORDER
+    from mlsgalerkin.structure.steppers.central_difference import NONLINEAR_ORDER
 
     mesh = MeshHex.init_tensor(*(np.linspace(0.0, a, n + 1) for a, n in ((0.1, 4), (0.1, 4), (0.4, 16))))
     block = ElasticBody("block", mesh, ElasticMaterial(1e7, 0.3, 1000.0), "Hex2", model="neo_hookean")

@@ -18,9 +18,12 @@ the solver that advances them (every :class:`Body` names its solver class), and 
 6. hands the :class:`~mlsgalerkin.simulation.RunState` to the monitors.
 
 A body kind that should take part implements a :class:`Body` (data: geometry, material,
-initial state) and a :class:`Solver` (state and how it advances, with its own integrator and
-sub-steps) whose state is a :class:`SystemState` (what monitors see: observables, health as a
-:class:`Diagnosis`, VTU frames). Nothing in the loop changes. See ``docs/architecture.md``.
+initial state), a :class:`Scheme` (the numerical settings of its solver: the fluid's effects,
+approximation and integrator; a structure's largest step) and a :class:`Solver` (state and how
+it advances, with its own integrator and sub-steps) whose state is a :class:`SystemState` (what
+monitors see: observables, health as a :class:`Diagnosis`, VTU frames). A solver is built from
+its bodies, its scheme and a :class:`SceneView` (what it may know of the rest of the scene); it
+never sees the scene itself. Nothing in the loop changes. See ``docs/architecture.md``.
 """
 
 from __future__ import annotations
@@ -29,13 +32,10 @@ import importlib
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
 
 __all__ = [
     "Body",
@@ -43,9 +43,12 @@ __all__ = [
     "Diagnosis",
     "DrivesWalls",
     "Interaction",
+    "SceneView",
+    "Scheme",
     "Solver",
     "Surface",
     "SystemState",
+    "import_class",
     "solver_class_of",
 ]
 
@@ -66,6 +69,61 @@ class Body:
     @property
     def dim(self) -> int:  # pragma: no cover - every body defines it
         raise NotImplementedError
+
+
+class Scheme:
+    """The numerical settings of one solver (plain data): the fluid's effects, approximation,
+    integrator and step limits (:class:`~mlsgalerkin.fluid.scheme.FluidScheme`), a structure's
+    largest step (:class:`~mlsgalerkin.structure.scheme.StructureScheme`).
+
+    A scene lists one scheme per solver (``Scene(bodies, schemes=[...])``); a solver whose
+    bodies have no scheme in the scene gets ``solver.scheme_class()``, its defaults.
+    """
+
+    #: The :class:`Solver` subclass these settings are for, or its import path
+    #: ``"package.module:Class"`` (as :attr:`Body.solver`).
+    solver: ClassVar[type["Solver"] | str]
+
+    def problems(self) -> list[str]:
+        """Problems with these settings alone (called before any work; empty if none)."""
+        return []
+
+    def identity(self) -> dict[str, Any]:
+        """The settings that make a run this run (JSON-serialisable; compared on restart)."""
+        return {}
+
+
+@dataclass(frozen=True)
+class SceneView:
+    """What a solver, an effect or an interaction may know of the scene it is part of: read only.
+
+    Attributes
+    ----------
+    name : str
+        The scene's name.
+    dim : int
+        Dimension of the bodies (0 if they disagree).
+    t_end : float
+        End time (s).
+    bodies : tuple of Body
+        Every body of the scene, in scene order (other solvers' bodies too: a fluid checks that
+        a structure does not overlap it).
+    interactions : tuple of Interaction
+        The scene's interactions.
+    probes : tuple
+        The scene's probes (``name``, ``func``, ``reads``), for checking what they read.
+    """
+
+    name: str
+    dim: int
+    t_end: float
+    bodies: tuple = ()
+    interactions: tuple = ()
+    probes: tuple = ()
+
+    def bodies_of(self, kind: type) -> list:
+        """The bodies that are instances of ``kind``, in scene order."""
+        return [b for b in self.bodies if isinstance(b, kind)]
 
 
 @dataclass
@@ -105,22 +163,25 @@ class Solver(ABC):
     ----------
     bodies : list of Body
         The scene's bodies of this solver's kind, in scene order.
-    scene : Scene
-        The whole scene (for the effects and options that apply to these bodies).
+    scheme : Scheme
+        This solver's numerical settings (an instance of :attr:`scheme_class`).
+    scene : SceneView
+        What the solver may know of the rest of the scene (read only).
     """
 
     #: Key of this solver's state in :attr:`RunState.systems` and of its part of the summary.
     key: ClassVar[str]
-    #: Whether the scene's ``effects`` are this solver's (the fluid's are).
-    takes_effects: ClassVar[bool] = False
+    #: The settings this solver takes; ``scheme_class()`` must give working defaults.
+    scheme_class: ClassVar[type[Scheme]] = Scheme
 
     @classmethod
-    def problems(cls, bodies: list[Body], scene: "Scene") -> list[str]:
-        """Every problem with these bodies in ``scene`` (called before any work; empty if none)."""
+    def problems(cls, bodies: list[Body], scheme: Scheme, scene: SceneView) -> list[str]:
+        """Every problem with these bodies and settings in ``scene`` (called before any work;
+        empty if none). Reads only: it changes neither the bodies nor the scheme."""
         return []
 
     @abstractmethod
-    def __init__(self, bodies: list[Body], scene: "Scene") -> None: ...
+    def __init__(self, bodies: list[Body], scheme: Scheme, scene: SceneView) -> None: ...
 
     @property
     @abstractmethod
@@ -181,14 +242,14 @@ class Interaction(ABC):
     first: str
     second: str
 
-    def problems(self, scene: "Scene") -> list[str]:
+    def problems(self, scene: SceneView) -> list[str]:
         """Every problem with this interaction in ``scene`` (empty if none). Validation only:
         it changes nothing (what the run needs from the scene is taken in :meth:`setup`)."""
         names = {b.name for b in scene.bodies}
         return [f"interaction {self.name!r}: no body named {b!r}" for b in (self.first, self.second)
                 if b not in names]
 
-    def setup(self, scene: "Scene") -> None:
+    def setup(self, scene: SceneView) -> None:
         """Take what the run needs from the validated ``scene`` (called once when the
         :class:`~mlsgalerkin.simulation.Simulation` is built, before the first step or a
         restore)."""
@@ -263,14 +324,19 @@ class Interaction(ABC):
         """Restore what :meth:`state_dict` returned (before the first step after a restart)."""
 
 
-def solver_class_of(body: Body) -> type[Solver]:
-    """The :class:`Solver` class that advances ``body`` (its ``solver`` attribute: a class, or
-    ``"package.module:Class"``, imported here)."""
-    spec = body.solver
+def import_class(spec: Any) -> Any:
+    """A class given as itself or as its import path ``"package.module:Class"`` (imported here):
+    how a :class:`Body` or a :class:`Scheme` names its solver without importing it."""
     if isinstance(spec, str):
         module, _, name = spec.partition(":")
         return getattr(importlib.import_module(module), name)
     return spec
+
+
+def solver_class_of(body: Body) -> type[Solver]:
+    """The :class:`Solver` class that advances ``body`` (its ``solver`` attribute: a class, or
+    ``"package.module:Class"``, imported here)."""
+    return import_class(body.solver)
 
 
 # --------------------------------------------------------------------------------------

@@ -44,7 +44,7 @@ import numpy as np
 from mlsgalerkin.dynamics import Diagnosis
 
 if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.simulation import RunState
+    from mlsgalerkin.run_state import RunState
 
 __all__ = [
     "Checkpoints",

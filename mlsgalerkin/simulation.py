@@ -26,15 +26,14 @@ import logging
 import signal
 import threading
 import time
-import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from mlsgalerkin.dynamics import Diagnosis, Solver, SystemState
+from mlsgalerkin.dynamics import Solver, SystemState
 from mlsgalerkin.monitors import (
     Checkpoints,
     Frames,
@@ -45,6 +44,7 @@ from mlsgalerkin.monitors import (
     SimulationDiverged,
     TimeSeries,
 )
+from mlsgalerkin.run_state import RunState
 from mlsgalerkin.run_directory import (
     RestartMismatch,
     RunDirectoryError,
@@ -105,55 +105,6 @@ def _stop_on_signals():
 
 
 @dataclass
-class RunState:
-    """What monitors and probes see: the time, the step, the last step size, the state of every
-    system (``systems["fluid"]`` is the :class:`~mlsgalerkin.fluid.state.FluidState`) and the
-    scene's interactions."""
-
-    t: float
-    step: int
-    dt: float
-    systems: dict[str, Any]
-    interactions: tuple = ()
-    _snapshot: Callable[[], tuple[dict, dict]] = field(repr=False, default=None)  # type: ignore[assignment]
-
-    @property
-    def fluid(self) -> Any:
-        """The fluid state (``None`` without fluid bodies)."""
-        return self.systems.get("fluid")
-
-    def observables(self) -> dict[str, dict[str, float]]:
-        """Each system's built-in time-series quantities, by system, then the interactions'
-        (under ``"interactions"``)."""
-        out = {k: s.observables() for k, s in self.systems.items() if hasattr(s, "observables")}
-        merged: dict[str, float] = {}
-        for i in self.interactions:
-            merged.update(i.observables())
-        if merged:
-            out["interactions"] = merged
-        return out
-
-    def health(self, limits: Any) -> Diagnosis | None:
-        """The first system's :class:`~mlsgalerkin.dynamics.Diagnosis` of an unsound state, with
-        the system's key, the step and the time filled in (``None`` if all are sound)."""
-        for key, s in self.systems.items():
-            diag = s.health(limits) if hasattr(s, "health") else None
-            if diag is None:
-                continue
-            if not isinstance(diag, Diagnosis):
-                warnings.warn(f"the health() of system {key!r} returned a {type(diag).__name__}; return a "
-                              "mlsgalerkin.dynamics.Diagnosis (a plain dict is read for one release)",
-                              DeprecationWarning, stacklevel=2)
-                diag = Diagnosis.from_mapping(diag)
-            return diag.completed(system=key, step=self.step, time=self.t)
-        return None
-
-    def snapshot(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-        """Arrays and metadata of a checkpoint from which the run continues bit for bit."""
-        return self._snapshot()
-
-
-@dataclass
 class RunResult:
     """What :meth:`Simulation.run` returns: final state, time series, summary, output folder,
     and the problem's results (from ``analyse``)."""
@@ -173,15 +124,16 @@ class Simulation:
         self.scene = scene
         self.solvers: list[Solver] = []
         self._solver_of: dict[str, Solver] = {}  # body name -> the solver that advances it
+        view = scene.view()
         for cls, bodies in scene.solver_groups().items():
-            solver = cls(bodies, scene)
+            solver = cls(bodies, scene.scheme_for(cls), view)
             if not isinstance(solver.state, SystemState):
                 raise TypeError(f"{cls.__name__}.state is a {type(solver.state).__name__}, which lacks what monitors "
                                 "call (observables(), health(limits), frame()): see mlsgalerkin.dynamics.SystemState")
             self.solvers.append(solver)
             self._solver_of.update({b.name: solver for b in bodies})
         for i in scene.interactions:
-            i.setup(scene)
+            i.setup(view)
         self.state = RunState(t=0.0, step=0, dt=0.0, systems={s.key: s.state for s in self.solvers},
                               interactions=tuple(scene.interactions), _snapshot=self.snapshot)
         self.started = False
@@ -206,14 +158,10 @@ class Simulation:
                 a = np.ascontiguousarray(arrays[name])
                 digest.update(f"{s.key}/{name}/{a.dtype}/{a.shape}".encode())
                 digest.update(a.tobytes())
-        integrator = getattr(sc.integrator, "name", sc.integrator)
-        settings = {
-            "bodies": [f"{type(b).__name__}({b.name!r})" for b in sc.bodies],
-            "effects": [repr(e) for e in sc.effects],
-            "approximation": to_jsonable(sc.approximation.__dict__),
-            "integrator": str(integrator), "mass": sc.mass, "safety": sc.safety, "dt_max": sc.dt_max,
-            "interactions": [repr(i) for i in sc.interactions],
-        }
+        settings: dict[str, Any] = {"bodies": [f"{type(b).__name__}({b.name!r})" for b in sc.bodies]}
+        for cls in sc.solver_groups():  # each solver's scheme (the fluid's: effects, approximation, ...)
+            settings.update(sc.scheme_for(cls).identity())
+        settings["interactions"] = [repr(i) for i in sc.interactions]
         return {"scene": sc.name, "problem": origin, "parameters": to_jsonable(sc.parameters),
                 "settings": to_jsonable(settings), "initial_state_sha256": digest.hexdigest(),
                 "mlsgalerkin_version": mlsgalerkin.__version__}

@@ -30,13 +30,23 @@ import numpy as np
 from skfem import MeshQuad
 
 from mlsgalerkin.fluid import (
-    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, WallBody, Walls,
-    hydrostatic_density, stabilisation, wall_box,
+    SHIFTING_MODES,
+    FluidBody,
+    Phase,
+    WallBody,
+    hydrostatic_density,
+    wall_box,
+    water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.interactions import StructureCoupling
-from mlsgalerkin.problem import numerical_dissipation, require, require_nonnegative, require_positive
-from mlsgalerkin.scene import Approximation, Output, Probe, Scene
+from mlsgalerkin.problem import (
+    numerical_dissipation,
+    require,
+    require_nonnegative,
+    require_positive,
+)
+from mlsgalerkin.scene import Output, Probe, Scene
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "SMOKE", "euler_bernoulli_period"]
@@ -95,8 +105,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     H = p.column_height
     u_max = 2.0 * math.sqrt(p.g * H)
     c0 = p.c0_factor * u_max
-    water = FluidBody.block("water", (0.0, 0.0), (p.column_width, H), p.dx, [Phase("water", p.rho)])
-    water.density[:] = hydrostatic_density(np.full(water.n, p.rho), H - water.positions[:, 1], p.g, c0)
+    water_body = FluidBody.block("water", (0.0, 0.0), (p.column_width, H), p.dx, [Phase("water", p.rho)])
+    water_body.density[:] = hydrostatic_density(np.full(water_body.n, p.rho), H - water_body.positions[:, 1], p.g, c0)
     wall_top = math.ceil(1.5 * p.beam_height / p.dx) * p.dx
     tank = wall_box((0.0, 0.0), (p.tank_length, wall_top), p.dx, layers=3, reference_density=p.rho, surface=True)
     beam = _beam(p)
@@ -107,18 +117,15 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                                  reference_density=p.rho)
     coupling = StructureCoupling("water", "beam", walls="beam_walls", thickness=0.25 * p.dx,
                                  wall_acceleration=p.wall_acceleration, iterations=p.iterations, tolerance=1e-7)
-    effects = [TaitPressure(c0, u_max=u_max, negative_pressure=p.negative_pressure), Gravity((0.0, -p.g)),
-               Walls("free_slip"), MonaghanViscosity(p.alpha)]
-    effects += stabilisation(delta=p.delta, shifting=p.shifting, negative_pressure=p.negative_pressure,
-                             penalty_thickness=0.25 * p.dx, spacing=p.dx)
+    scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
+                   negative_pressure=p.negative_pressure, penalty_thickness=0.25 * p.dx, spacing=p.dx)
 
     def tip_x(state) -> float:
-        m = state.systems["structure"].body("beam")
+        m = state.body("beam")
         return float(beam.point_displacements(m.u)["tip"][0])
 
     return Scene(
-        [water, tank, riding, beam], effects, t_end=p.t_end, name="beam_clamped",
-        approximation=Approximation(h_factor=1.3), interactions=[coupling],
+        [water_body, tank, riding, beam], [scheme], t_end=p.t_end, name="beam_clamped", interactions=[coupling],
         output=Output(every=p.frame_every, probe_every=p.probe_every, gif=p.gif, png=p.gif, color_by="pressure"),
         probes=[Probe("tip_x", tip_x)], parameters=dict(p.__dict__),
     )

@@ -36,14 +36,24 @@ import numpy as np
 
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.fluid import (
-    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, WallBody, Walls,
-    hydrostatic_density, lattice, stabilisation,
+    SHIFTING_MODES,
+    FluidBody,
+    Phase,
+    WallBody,
+    hydrostatic_density,
+    lattice,
+    water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.fluid.sensors import pressure_at, sensor_points
 from mlsgalerkin.interactions import StructureCoupling
-from mlsgalerkin.problem import numerical_dissipation, require, require_nonnegative, require_positive
-from mlsgalerkin.scene import Approximation, Output, Probe, Scene
+from mlsgalerkin.problem import (
+    numerical_dissipation,
+    require,
+    require_nonnegative,
+    require_positive,
+)
+from mlsgalerkin.scene import Output, Probe, Scene
 from mlsgalerkin.structure import Hinge, RigidBody
 
 __all__ = ["Parameters", "SUPPORTS", "make_scene", "analyse", "check", "SMOKE"]
@@ -117,8 +127,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     H = p.height
     u_max = 2.0 * math.sqrt(p.g * H)
     c0 = p.c0_factor * u_max
-    water = FluidBody.block("water", (0.0, 0.0), (2.0 * H, H), p.dx, [Phase("water", p.rho)])
-    water.density[:] = hydrostatic_density(np.full(water.n, p.rho), H - water.positions[:, 1], p.g, c0)
+    water_body = FluidBody.block("water", (0.0, 0.0), (2.0 * H, H), p.dx, [Phase("water", p.rho)])
+    water_body.density[:] = hydrostatic_density(np.full(water_body.n, p.rho), H - water_body.positions[:, 1], p.g, c0)
     top = math.ceil(p.beam_length / p.dx) * p.dx
     beam = _beam(p)
     layers = max(1, min(3, int(p.thickness / p.dx)))
@@ -126,27 +136,25 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                                  reference_density=p.rho)
     coupling = StructureCoupling("water", "beam", walls="beam_walls", thickness=0.25 * p.dx,
                                  wall_acceleration=p.wall_acceleration)
-    effects = [TaitPressure(c0, u_max=u_max, negative_pressure=p.negative_pressure), Gravity((0.0, -p.g)),
-               Walls("free_slip"), MonaghanViscosity(p.alpha)]
-    effects += stabilisation(delta=p.delta, shifting=p.shifting, negative_pressure=p.negative_pressure,
-                             penalty_thickness=0.25 * p.dx, spacing=p.dx)
-    approximation = Approximation(h_factor=1.3)
+    scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
+                   negative_pressure=p.negative_pressure, penalty_thickness=0.25 * p.dx, spacing=p.dx)
+    approximation = scheme.approximation
     hinge = np.array([p.tank_length, 0.0])
     local = sensor_points((p.tank_length, 0.0), SENSOR_HEIGHT - 0.5 * SENSOR_SIZE, SENSOR_HEIGHT + 0.5 * SENSOR_SIZE,
                           axis=1, count=5) - hinge
 
     def pressure_p4(state) -> float:
-        theta = state.systems["structure"].body("beam").theta
+        theta = state.body("beam").theta
         c, s = math.cos(theta), math.sin(theta)
         pts = hinge + local @ np.array([[c, s], [-s, c]])
         return float(pressure_at(state.fluid, pts, approximation.kernel).mean())
 
     def angle(state) -> float:
-        return float(state.systems["structure"].body("beam").theta)
+        return float(state.body("beam").theta)
 
     return Scene(
-        [water, _tank(p, top), riding, beam], effects, t_end=p.t_end, name="beam_on_spring",
-        approximation=approximation, interactions=[coupling],
+        [water_body, _tank(p, top), riding, beam], [scheme], t_end=p.t_end, name="beam_on_spring",
+        interactions=[coupling],
         output=Output(every=p.frame_every, probe_every=p.probe_every, gif=p.gif, png=p.gif, color_by="pressure"),
         probes=[Probe("angle", angle), Probe("pressure_P4", pressure_p4)], parameters=dict(p.__dict__),
     )

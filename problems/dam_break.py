@@ -30,12 +30,16 @@ import numpy as np
 
 from mlsgalerkin.data import reference_columns
 from mlsgalerkin.fluid import (
-    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, hydrostatic_density,
-    stabilisation, wall_box,
+    SHIFTING_MODES,
+    FluidBody,
+    Phase,
+    hydrostatic_density,
+    wall_box,
+    water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
-from mlsgalerkin.scene import Approximation, Output, Probe, Scene
+from mlsgalerkin.scene import Output, Probe, Scene
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "load_martin_moyce", "SMOKE"]
 
@@ -69,27 +73,24 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     a = p.column_width
     height = 2.0 * a
     c0 = p.c0_factor * math.sqrt(2.0 * p.g * height)
-    water = FluidBody.block("water", (0.0, 0.0), (a, height), p.dx, [Phase("water", p.rho)])
-    water.density[:] = hydrostatic_density(np.full(water.n, p.rho), height - water.positions[:, 1], p.g, c0)
+    water_column = FluidBody.block("water", (0.0, 0.0), (a, height), p.dx, [Phase("water", p.rho)])
+    water_column.density[:] = hydrostatic_density(np.full(water_column.n, p.rho), height - water_column.positions[:, 1], p.g, c0)
     # the wall height a whole number of spacings, so the side-wall rows sit on the fluid lattice
     wall_top = math.ceil(p.tank_height_factor * height / p.dx) * p.dx
     walls = wall_box((0.0, 0.0), (p.tank_length_factor * a, wall_top), p.dx, layers=3, reference_density=p.rho,
                      surface=p.penalty_walls)
-    effects = [TaitPressure(c0, u_max=math.sqrt(2.0 * p.g * height), negative_pressure=p.negative_pressure),
-               Gravity((0.0, -p.g)), Walls("free_slip")]
-    if p.alpha > 0:
-        effects.append(MonaghanViscosity(p.alpha, flow=(math.sqrt(2.0 * p.g * height), a)))
-    effects += stabilisation(delta=p.delta, shifting=p.shifting, negative_pressure=p.negative_pressure,
-                             penalty_thickness=p.penalty_thickness * p.dx if p.penalty_walls else None, spacing=p.dx,
-                             consistent_integration=p.consistent_integration)
-    n_fluid = water.n
+    scheme = water(c0, u_max=math.sqrt(2.0 * p.g * height), gravity=(0.0, -p.g), alpha=p.alpha,
+                   flow=(math.sqrt(2.0 * p.g * height), a), delta=p.delta, shifting=p.shifting,
+                   negative_pressure=p.negative_pressure,
+                   penalty_thickness=p.penalty_thickness * p.dx if p.penalty_walls else None,
+                   consistent_integration=p.consistent_integration, spacing=p.dx, h_factor=p.h_factor)
+    n_fluid = water_column.n
 
     def front_x(state) -> float:
         return float(state.fluid.x[:n_fluid, 0].max()) + 0.5 * p.dx
 
     return Scene(
-        [water, walls], effects, t_end=p.t_end, name="dam_break",
-        approximation=Approximation(h_factor=p.h_factor),
+        [water_column, walls], [scheme], t_end=p.t_end, name="dam_break",
         output=Output(every=p.frame_every, gif=p.gif, png=p.gif, color_by="pressure"),
         probes=[Probe("front_x", front_x)],
         parameters=dict(p.__dict__),

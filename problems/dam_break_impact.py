@@ -36,13 +36,17 @@ import numpy as np
 
 from mlsgalerkin.data import reference_columns
 from mlsgalerkin.fluid import (
-    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, hydrostatic_density,
-    stabilisation, wall_box,
+    SHIFTING_MODES,
+    FluidBody,
+    Phase,
+    hydrostatic_density,
+    wall_box,
+    water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.fluid.sensors import pressure_at, sensor_points
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
-from mlsgalerkin.scene import MAX_FRAMES, Approximation, Output, Probe, Scene
+from mlsgalerkin.scene import MAX_FRAMES, Output, Probe, Scene
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "load_reference", "sensor_heights", "SMOKE"]
 
@@ -86,20 +90,17 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     length = p.tank_length_factor * H
     u_max = 2.0 * math.sqrt(p.g * H)
     c0 = p.c0_factor * u_max
-    water = FluidBody.block("water", (0.0, 0.0), (2.0 * H, H), p.dx, [Phase("water", p.rho)])
-    water.density[:] = hydrostatic_density(np.full(water.n, p.rho), H - water.positions[:, 1], p.g, c0)
+    water_column = FluidBody.block("water", (0.0, 0.0), (2.0 * H, H), p.dx, [Phase("water", p.rho)])
+    water_column.density[:] = hydrostatic_density(np.full(water_column.n, p.rho), H - water_column.positions[:, 1], p.g, c0)
     # the wall height a whole number of spacings, so the side-wall rows sit on the fluid lattice
     wall_top = math.ceil(p.tank_height_factor * H / p.dx) * p.dx
     walls = wall_box((0.0, 0.0), (length, wall_top), p.dx, layers=3, reference_density=p.rho,
                      surface=p.penalty_walls)
-    effects = [TaitPressure(c0, u_max=u_max, negative_pressure=p.negative_pressure), Gravity((0.0, -p.g)),
-               Walls("free_slip")]
-    if p.alpha > 0:
-        effects.append(MonaghanViscosity(p.alpha))
-    effects += stabilisation(delta=p.delta, shifting=p.shifting, negative_pressure=p.negative_pressure,
-                             penalty_thickness=p.penalty_thickness * p.dx if p.penalty_walls else None, spacing=p.dx,
-                             consistent_integration=p.consistent_integration)
-    approximation = Approximation(h_factor=p.h_factor)
+    scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
+                   negative_pressure=p.negative_pressure,
+                   penalty_thickness=p.penalty_thickness * p.dx if p.penalty_walls else None,
+                   consistent_integration=p.consistent_integration, spacing=p.dx, h_factor=p.h_factor)
+    approximation = scheme.approximation
     probes = []
     for k, (lo, hi) in enumerate(sensor_heights(p), start=1):
         pts = sensor_points((length, 0.0), lo, hi, axis=1, count=5)
@@ -108,7 +109,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     frames = sorted(set(np.round(np.arange(0.0, p.t_end + 1e-12, p.frame_every), 9).tolist()
                         + [float(t) for t in T * math.sqrt(H / p.g) if t <= p.t_end]))
     return Scene(
-        [water, walls], effects, t_end=p.t_end, name="dam_break_impact", approximation=approximation,
+        [water_column, walls], [scheme], t_end=p.t_end, name="dam_break_impact",
         output=Output(times=frames, probe_every=p.probe_every, gif=p.gif, png=p.gif, color_by="pressure"),
         probes=probes, parameters=dict(p.__dict__),
     )

@@ -33,12 +33,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.fluid import (
-    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, NewtonianViscosity, Phase, TaitPressure, Walls,
-    hydrostatic_density, lattice, stabilisation, tait_stored_energy, wall_box,
+    SHIFTING_MODES,
+    FluidBody,
+    Phase,
+    hydrostatic_density,
+    lattice,
+    tait_stored_energy,
+    wall_box,
+    water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
-from mlsgalerkin.scene import Approximation, Output, Probe, Scene
+from mlsgalerkin.scene import Output, Probe, Scene
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "PAPER_OUTPUT_TIMES", "SMOKE"]
 
@@ -76,7 +82,7 @@ def internal_energy(s, n: int, c0: float, gamma: float = 7.0) -> float:
 
 def make_scene(p: Parameters = Parameters()) -> Scene:
     c0 = p.c0_factor * p.speed
-    water = Phase("liquid", p.rho, p.viscosity)
+    liquid = Phase("liquid", p.rho, p.viscosity)
     pool = lattice((0.0, 0.0), (p.pool_width, p.pool_depth), p.dx)
     R = 0.5 * p.drop_diameter
     centre = np.array([0.5 * p.pool_width, p.pool_depth + R + 1.5 * p.dx])
@@ -88,15 +94,12 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     vel[pool.shape[0]:, 1] = -p.speed
     depth = np.where(np.arange(len(pos)) < pool.shape[0], p.pool_depth - pos[:, 1], 0.0)
     rho = hydrostatic_density(np.full(len(pos), p.rho), depth, p.g, c0)
-    body = FluidBody("liquid", pos, p.dx, [water], velocity=vel, density=rho)
+    body = FluidBody("liquid", pos, p.dx, [liquid], velocity=vel, density=rho)
     walls = wall_box((0.0, 0.0), (p.pool_width, 2.2 * p.pool_depth), p.dx, layers=3, reference_density=p.rho)
     n = body.n
-    effects = [TaitPressure(c0, u_max=p.speed, negative_pressure=p.negative_pressure), Gravity((0.0, -p.g)),
-               Walls("free_slip"), NewtonianViscosity()]
-    if p.alpha > 0:
-        effects.append(MonaghanViscosity(p.alpha))
-    effects += stabilisation(delta=p.delta, shifting=p.shifting, density_filter=p.density_filter,
-                             negative_pressure=p.negative_pressure, consistent_integration=p.consistent_integration)
+    scheme = water(c0, u_max=p.speed, gravity=(0.0, -p.g), newtonian=True, alpha=p.alpha, delta=p.delta,
+                   shifting=p.shifting, density_filter=p.density_filter, negative_pressure=p.negative_pressure,
+                   consistent_integration=p.consistent_integration, spacing=p.dx, h_factor=p.h_factor)
 
     def total_energy(state) -> float:
         s = state.fluid
@@ -106,8 +109,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
 
     return Scene(
         [body, walls],
-        effects,
-        t_end=p.t_end, name="drop_impact", approximation=Approximation(h_factor=p.h_factor),
+        [scheme],
+        t_end=p.t_end, name="drop_impact",
         output=Output(times=(0.0,) + tuple(t for t in PAPER_OUTPUT_TIMES if t <= p.t_end) + (p.t_end,),
                       probe_every=0.0005, gif=p.gif, png=p.gif, color_by="speed"),
         probes=[Probe("total_energy", total_energy),
@@ -125,8 +128,7 @@ def snapshot_figure(run_dir, out_png, color_by: str = "speed") -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from mlsgalerkin.io import read_pvd, read_vtu
-    from mlsgalerkin.io import atomic_write
+    from mlsgalerkin.io import atomic_write, read_pvd, read_vtu
 
     frames = read_pvd(run_dir / "particles.pvd")
     k = len(frames)

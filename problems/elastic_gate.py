@@ -44,13 +44,24 @@ from skfem import FacetBasis, LinearForm, MeshQuad, asm
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.data import reference_columns
 from mlsgalerkin.fluid import (
-    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, WallBody, Walls,
-    hydrostatic_density, lattice, stabilisation, wall_box,
+    SHIFTING_MODES,
+    FluidBody,
+    Phase,
+    WallBody,
+    hydrostatic_density,
+    lattice,
+    wall_box,
+    water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.interactions import StructureCoupling
-from mlsgalerkin.problem import numerical_dissipation, require, require_nonnegative, require_positive
-from mlsgalerkin.scene import Approximation, Output, Probe, Scene
+from mlsgalerkin.problem import (
+    numerical_dissipation,
+    require,
+    require_nonnegative,
+    require_positive,
+)
+from mlsgalerkin.scene import Output, Probe, Scene
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "load_reference", "static_tip", "SMOKE"]
@@ -127,8 +138,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     H = p.column_height
     u_max = math.sqrt(2.0 * p.g * H)
     c0 = p.c0_factor * u_max
-    water = FluidBody.block("water", (0.0, 0.0), (p.column_width, H), p.dx, [Phase("water", p.rho)])
-    water.density[:] = hydrostatic_density(np.full(water.n, p.rho), H - water.positions[:, 1], p.g, c0)
+    water_body = FluidBody.block("water", (0.0, 0.0), (p.column_width, H), p.dx, [Phase("water", p.rho)])
+    water_body.density[:] = hydrostatic_density(np.full(water_body.n, p.rho), H - water_body.positions[:, 1], p.g, c0)
     top = math.ceil(1.4 * H / p.dx) * p.dx
     tank = wall_box((0.0, 0.0), (p.tank_length, top), p.dx, layers=3, reference_density=p.rho, surface=True)
     # the rigid wall above the gate: wall particles across its thickness, facing the water
@@ -146,18 +157,16 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                                  reference_density=p.rho)
     coupling = StructureCoupling("water", "gate", walls="gate_walls", thickness=0.25 * p.dx,
                                  wall_acceleration=p.wall_acceleration, iterations=p.iterations)
-    effects = [TaitPressure(c0, u_max=u_max, negative_pressure=p.negative_pressure), Gravity((0.0, -p.g)),
-               Walls("free_slip"), MonaghanViscosity(p.alpha)]
-    effects += stabilisation(delta=p.delta, shifting=p.shifting, negative_pressure=p.negative_pressure,
-                             penalty_thickness=0.25 * p.dx, spacing=p.dx)
+    scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
+                   negative_pressure=p.negative_pressure, penalty_thickness=0.25 * p.dx, spacing=p.dx)
 
     def tip(k: int):
         def read(state) -> float:
-            m = state.systems["structure"].body("gate")
+            m = state.body("gate")
             return float(gate.point_displacements(m.u)["tip"][k])
         return read
 
-    n_water = water.n
+    n_water = water_body.n
 
     def water_level(state) -> float:
         """Height (m) of the water column behind the gate: the highest water particle over the
@@ -167,8 +176,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
         return float(x[middle, 1].max()) + 0.5 * p.dx if middle.any() else 0.0
 
     return Scene(
-        [water, tank, cap, riding, gate], effects, t_end=p.t_end, name="elastic_gate",
-        approximation=Approximation(h_factor=1.3), interactions=[coupling],
+        [water_body, tank, cap, riding, gate], [scheme], t_end=p.t_end, name="elastic_gate", interactions=[coupling],
         output=Output(every=p.frame_every, probe_every=p.probe_every, gif=p.gif, png=p.gif, color_by="speed"),
         probes=[Probe("tip_x", tip(0)), Probe("tip_y", tip(1)), Probe("water_level", water_level)],
         parameters=dict(p.__dict__),

@@ -61,11 +61,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.fluid import (
-    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, NewtonianViscosity, Phase, TaitPressure, Walls,
-    hydrostatic_density, stabilisation, wall_box,
+    SHIFTING_MODES,
+    FluidBody,
+    Phase,
+    hydrostatic_density,
+    wall_box,
+    water,
 )
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
-from mlsgalerkin.scene import Approximation, Output, Probe, Scene
+from mlsgalerkin.scene import Output, Probe, Scene
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "reference_head_speed", "SMOKE"]
 
@@ -127,16 +131,11 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                      reference_density=p.rho_light, surface=p.penalty_walls)
     c0 = sound_speed(p)
     u_max = reference_head_speed(p) * 2.5
-    effects = [TaitPressure(c0, u_max=u_max, negative_pressure=p.negative_pressure), Gravity((0.0, -p.g)),
-               Walls(p.slip)]
-    if p.alpha > 0:
-        effects.append(MonaghanViscosity(p.alpha, flow=(reference_head_speed(p), p.depth)))
-    effects += stabilisation(delta=p.delta, shifting=p.shifting, density_filter=p.density_filter,
-                             negative_pressure=p.negative_pressure,
-                             penalty_thickness=0.25 * p.dx if p.penalty_walls else None, spacing=p.dx,
-                             consistent_integration=p.consistent_integration)
-    if p.viscosity > 0:
-        effects.append(NewtonianViscosity())
+    scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), slip=p.slip, alpha=p.alpha,
+                   flow=(reference_head_speed(p), p.depth), newtonian=p.viscosity > 0, delta=p.delta,
+                   shifting=p.shifting, density_filter=p.density_filter, negative_pressure=p.negative_pressure,
+                   penalty_thickness=0.25 * p.dx if p.penalty_walls else None,
+                   consistent_integration=p.consistent_integration, spacing=p.dx, h_factor=p.h_factor)
     n_fluid = body.n
     half = 0.5 * p.depth
 
@@ -163,8 +162,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     if p.lid:
         probes += [Probe("top_pressure_spread", top_pressure_spread), Probe("top_pressure_mean", top_pressure_mean)]
     return Scene(
-        [body, walls], effects, t_end=p.t_end, name="gravity_current",
-        approximation=Approximation(h_factor=p.h_factor),
+        [body, walls], [scheme], t_end=p.t_end, name="gravity_current",
         output=Output(every=p.frame_every, probe_every=0.002, gif=p.gif, png=p.gif, color_by="density"),
         probes=probes,
         parameters=dict(p.__dict__),

@@ -16,10 +16,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.fluid import (
-    DensityFilter, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, hydrostatic_density, wall_box,
+    FluidBody,
+    Phase,
+    hydrostatic_density,
+    wall_box,
+    water,
 )
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
-from mlsgalerkin.scene import Approximation, Output, Probe, Scene
+from mlsgalerkin.scene import Output, Probe, Scene
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "SMOKE"]
 
@@ -44,11 +48,11 @@ class Parameters:
 
 def make_scene(p: Parameters = Parameters()) -> Scene:
     c0 = p.c0_factor * math.sqrt(2.0 * p.g * p.depth)
-    water = FluidBody.block("water", (0.0, 0.0), (p.width, p.depth), p.dx, [Phase("water", p.rho)])
-    y = water.positions[:, 1]
-    water.density[:] = hydrostatic_density(np.full(water.n, p.rho), p.depth - y, p.g, c0)
+    water_body = FluidBody.block("water", (0.0, 0.0), (p.width, p.depth), p.dx, [Phase("water", p.rho)])
+    y = water_body.positions[:, 1]
+    water_body.density[:] = hydrostatic_density(np.full(water_body.n, p.rho), p.depth - y, p.g, c0)
     walls = wall_box((0.0, 0.0), (p.width, 1.5 * p.depth), p.dx, layers=3, reference_density=p.rho)
-    n = water.n
+    n = water_body.n
     scale = p.rho * p.g * p.depth
 
     def pressure_rms_error(state) -> float:
@@ -62,9 +66,10 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
         return float(np.count_nonzero(out))
 
     return Scene(
-        [water, walls],
-        [TaitPressure(c0), Gravity((0.0, -p.g)), Walls(p.slip), MonaghanViscosity(p.alpha), DensityFilter(20)],
-        t_end=p.t_end, name="hydrostatic", approximation=Approximation(h_factor=p.h_factor),
+        [water_body, walls],
+        [water(c0, gravity=(0.0, -p.g), slip=p.slip, alpha=p.alpha, delta=0.0, shifting="off", density_filter=20,
+               negative_pressure="allow", spacing=p.dx, h_factor=p.h_factor)],
+        t_end=p.t_end, name="hydrostatic",
         output=Output(every=p.frame_every, probe_every=0.005, gif=p.gif, png=p.gif, color_by="pressure"),
         probes=[Probe("pressure_rms_error", pressure_rms_error), Probe("wall_crossings", wall_crossings)],
         parameters=dict(p.__dict__),

@@ -29,12 +29,16 @@ import numpy as np
 from skfem import MeshQuad
 
 from mlsgalerkin.fluid import (
-    DensityFilter, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, WallBody, Walls,
-    hydrostatic_density, lattice,
+    FluidBody,
+    Phase,
+    WallBody,
+    hydrostatic_density,
+    lattice,
+    water,
 )
 from mlsgalerkin.interactions import StructureCoupling
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
-from mlsgalerkin.scene import Approximation, Output, Probe, Scene
+from mlsgalerkin.scene import Output, Probe, Scene
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "SMOKE", "plate_theory"]
@@ -94,26 +98,27 @@ def _side_walls(p: Parameters, layers: int = 3) -> WallBody:
 
 def make_scene(p: Parameters = Parameters()) -> Scene:
     c0 = p.c0_factor * math.sqrt(2.0 * p.g * p.depth)
-    water = FluidBody.block("water", (0.0, 0.0), (p.length, p.depth), p.dx, [Phase("water", p.rho)])
-    water.density[:] = hydrostatic_density(np.full(water.n, p.rho), p.depth - water.positions[:, 1], p.g, c0)
+    water_body = FluidBody.block("water", (0.0, 0.0), (p.length, p.depth), p.dx, [Phase("water", p.rho)])
+    water_body.density[:] = hydrostatic_density(np.full(water_body.n, p.rho), p.depth - water_body.positions[:, 1], p.g, c0)
     plate = _plate(p)
     riding = WallBody.on_surface("plate_walls", plate.wet.contact_surface(), p.dx, follows="plate",
                                  reference_density=p.rho)
     coupling = StructureCoupling("water", "plate", walls="plate_walls", thickness=0.25 * p.dx,
                                  wall_acceleration=p.wall_acceleration)
-    n = water.n
+    n = water_body.n
 
     def midspan(state) -> float:
-        m = state.systems["structure"].body("plate")
+        m = state.body("plate")
         return float(plate.point_displacements(m.u)["mid"][1])
 
     def crossings(state) -> float:
         return float(np.count_nonzero(state.fluid.x[:n, 1] < 0.0))
 
     return Scene(
-        [water, _side_walls(p), riding, plate],
-        [TaitPressure(c0), Gravity((0.0, -p.g)), Walls("free_slip"), MonaghanViscosity(p.alpha), DensityFilter(20)],
-        t_end=p.t_end, name="hydrostatic_plate", approximation=Approximation(h_factor=1.3),
+        [water_body, _side_walls(p), riding, plate],
+        [water(c0, gravity=(0.0, -p.g), alpha=p.alpha, delta=0.0, shifting="off", density_filter=20,
+               negative_pressure="allow", spacing=p.dx)],
+        t_end=p.t_end, name="hydrostatic_plate",
         interactions=[coupling],
         output=Output(every=p.frame_every, probe_every=0.001, gif=p.gif, png=p.gif, color_by="pressure"),
         probes=[Probe("midspan_deflection", midspan), Probe("plate_crossings", crossings)],

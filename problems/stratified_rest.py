@@ -36,11 +36,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.fluid import (
-    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, hydrostatic_pressure,
-    stabilisation, tait_density, wall_box,
+    SHIFTING_MODES,
+    FluidBody,
+    Phase,
+    hydrostatic_pressure,
+    tait_density,
+    wall_box,
+    water,
 )
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
-from mlsgalerkin.scene import Approximation, Output, Probe, Scene
+from mlsgalerkin.scene import Output, Probe, Scene
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "exact_pressure", "SMOKE"]
 
@@ -100,11 +105,10 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                      reference_density=p.rho_light)
     g_reduced = p.g * (p.rho_heavy - p.rho_light) / p.rho_light
     wave = math.sqrt(g_reduced * p.depth)
-    effects = [TaitPressure(c0, u_max=max(wave, 1e-9)), Gravity((0.0, -p.g)), Walls("free_slip")]
-    if p.alpha > 0:
-        effects.append(MonaghanViscosity(p.alpha, residual=p.residual_viscosity, flow=(0.5 * wave, p.depth)))
-    effects += stabilisation(delta=p.delta, shifting=p.shifting, density_filter=p.density_filter,
-                             consistent_integration=p.consistent_integration)
+    scheme = water(c0, u_max=max(wave, 1e-9), gravity=(0.0, -p.g), alpha=p.alpha, flow=(0.5 * wave, p.depth),
+                   residual_viscosity=p.residual_viscosity, delta=p.delta, shifting=p.shifting,
+                   density_filter=p.density_filter, negative_pressure="allow",
+                   consistent_integration=p.consistent_integration, spacing=p.dx, h_factor=p.h_factor)
     n = body.n
     scale = (p.rho_heavy - p.rho_light) * p.g * p.depth
 
@@ -120,8 +124,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
         return float(np.sqrt(np.mean(dev**2)) / scale)
 
     return Scene(
-        [body, walls], effects, t_end=p.t_end, name="stratified_rest",
-        approximation=Approximation(h_factor=p.h_factor),
+        [body, walls], [scheme], t_end=p.t_end, name="stratified_rest",
         output=Output(every=p.frame_every, probe_every=0.01, gif=p.gif, png=p.gif, color_by="pressure"),
         probes=[Probe("max_speed_ratio", max_speed_ratio), Probe("pressure_rms_ratio", pressure_rms_ratio)],
         parameters=dict(p.__dict__),

@@ -40,12 +40,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.fluid import (
-    DensityFilter, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, WallBody, Walls,
-    hydrostatic_density, lattice,
+    FluidBody,
+    Phase,
+    WallBody,
+    hydrostatic_density,
+    lattice,
+    water,
 )
 from mlsgalerkin.motion import Oscillation
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
-from mlsgalerkin.scene import Approximation, Output, Probe, Scene
+from mlsgalerkin.scene import Output, Probe, Scene
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "wave_number", "height_over_stroke", "SMOKE"]
 
@@ -110,8 +114,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     """The wave tank for parameters ``p``."""
     dx, d = p.dx, p.depth
     c0 = p.c0_factor * math.sqrt(p.g * d)
-    water = FluidBody.block("water", (0.0, 0.0), (p.tank_length, d), dx, [Phase("water", 1000.0)])
-    water.density[:] = hydrostatic_density(np.full(water.n, 1000.0), d - water.positions[:, 1], p.g, c0)
+    water_body = FluidBody.block("water", (0.0, 0.0), (p.tank_length, d), dx, [Phase("water", 1000.0)])
+    water_body.density[:] = hydrostatic_density(np.full(water_body.n, 1000.0), d - water_body.positions[:, 1], p.g, c0)
     top = 1.6 * d
     layers = 3 * dx
     # fixed tank: a floor reaching under the paddle's whole travel, and the far wall
@@ -127,7 +131,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     paddle_x = lattice((-layers, 0.0), (0.0, top), dx)
     paddle = WallBody("paddle", paddle_x, dx, normals=np.tile([1.0, 0.0], (len(paddle_x), 1)),
                       motion=Oscillation(p.stroke, p.period, direction=(1.0, 0.0), ramp=p.ramp_periods * p.period))
-    n = water.n
+    n = water_body.n
     x_p, half_width = p.probe_x, 4.0 * dx
 
     def eta(state) -> float:
@@ -139,11 +143,10 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
         return float(paddle.motion.displacement(state.t)[0])
 
     u_max = 0.5 * p.stroke * 2 * math.pi / p.period / math.tanh(wave_number(p.period, d, p.g) * d)
-    effects = [TaitPressure(c0, u_max=u_max), Gravity((0.0, -p.g)), Walls("free_slip"),
-               MonaghanViscosity(p.alpha), DensityFilter(20)]
+    scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), alpha=p.alpha, delta=0.0, shifting="off", density_filter=20,
+                   negative_pressure="allow", spacing=p.dx, h_factor=p.h_factor)
     return Scene(
-        [water, tank, paddle], effects, t_end=p.t_end, name="wave_maker",
-        approximation=Approximation(h_factor=p.h_factor),
+        [water_body, tank, paddle], [scheme], t_end=p.t_end, name="wave_maker",
         output=Output(every=p.frame_every, probe_every=p.probe_every, gif=p.gif, png=p.gif, color_by="pressure"),
         probes=[Probe("eta", eta), Probe("piston_x", piston_x)],
         parameters=dict(p.__dict__),

@@ -38,13 +38,23 @@ import numpy as np
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.data import reference_columns
 from mlsgalerkin.fluid import (
-    SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, WallBody, Walls,
-    hydrostatic_density, stabilisation, wall_box,
+    SHIFTING_MODES,
+    FluidBody,
+    Phase,
+    WallBody,
+    hydrostatic_density,
+    wall_box,
+    water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.interactions import StructureCoupling
-from mlsgalerkin.problem import numerical_dissipation, require, require_nonnegative, require_positive
-from mlsgalerkin.scene import Approximation, Output, Probe, Scene
+from mlsgalerkin.problem import (
+    numerical_dissipation,
+    require,
+    require_nonnegative,
+    require_positive,
+)
+from mlsgalerkin.scene import Output, Probe, Scene
 from mlsgalerkin.structure import RigidBody
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "load_reference", "wedge_surface", "SMOKE"]
@@ -98,8 +108,8 @@ def load_reference() -> dict[str, np.ndarray]:
 def make_scene(p: Parameters = Parameters()) -> Scene:
     c0 = p.c0_factor * p.velocity
     half = 0.5 * p.tank_width
-    water = FluidBody.block("water", (-half, 0.0), (half, p.depth), p.dx, [Phase("water", p.rho)])
-    water.density[:] = hydrostatic_density(np.full(water.n, p.rho), p.depth - water.positions[:, 1], p.g, c0)
+    water_body = FluidBody.block("water", (-half, 0.0), (half, p.depth), p.dx, [Phase("water", p.rho)])
+    water_body.density[:] = hydrostatic_density(np.full(water_body.n, p.rho), p.depth - water_body.positions[:, 1], p.g, c0)
     top = math.ceil(1.6 * p.depth / p.dx) * p.dx
     tank = wall_box((-half, 0.0), (half, top), p.dx, layers=3, reference_density=p.rho, surface=True)
     surface = wedge_surface(p, (0.0, p.depth))
@@ -110,20 +120,17 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     riding = WallBody.on_surface("wedge_walls", surface, p.dx, follows="wedge", reference_density=p.rho)
     coupling = StructureCoupling("water", "wedge", walls="wedge_walls", thickness=0.25 * p.dx,
                                  wall_acceleration=p.wall_acceleration)
-    effects = [TaitPressure(c0, u_max=p.velocity, negative_pressure=p.negative_pressure), Gravity((0.0, -p.g)),
-               Walls("free_slip"), MonaghanViscosity(p.alpha)]
-    effects += stabilisation(delta=p.delta, shifting=p.shifting, negative_pressure=p.negative_pressure,
-                             penalty_thickness=0.25 * p.dx, spacing=p.dx)
+    scheme = water(c0, u_max=p.velocity, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
+                   negative_pressure=p.negative_pressure, penalty_thickness=0.25 * p.dx, spacing=p.dx)
 
     def velocity(state) -> float:
-        return -float(state.systems["structure"].body("wedge").V[1])
+        return -float(state.body("wedge").V[1])
 
     def force(state) -> float:
-        return SECTION * float(state.systems["structure"].body("wedge").F[1])
+        return SECTION * float(state.body("wedge").F[1])
 
     return Scene(
-        [water, tank, riding, wedge], effects, t_end=p.t_end, name="wedge_drop",
-        approximation=Approximation(h_factor=1.3), interactions=[coupling],
+        [water_body, tank, riding, wedge], [scheme], t_end=p.t_end, name="wedge_drop", interactions=[coupling],
         output=Output(every=p.frame_every, probe_every=p.probe_every, gif=p.gif, png=p.gif, color_by="pressure"),
         probes=[Probe("velocity", velocity), Probe("force", force)], parameters=dict(p.__dict__),
     )

@@ -3,7 +3,8 @@
 Every module is parsed with :mod:`ast`; every ``import mlsgalerkin...`` / ``from mlsgalerkin...
 import ...``, module-level or inside a function, is an edge. Importing ``a.b.c`` runs the
 ``__init__`` of ``a.b`` first, so it is also an edge to ``a.b``. Imports under
-``if TYPE_CHECKING:`` are never executed and are left out. The package graph merges every module
+``if TYPE_CHECKING:`` count too: a type-only circle is still a circle in the design (the two
+modules cannot be read, tested or moved apart). The package graph merges every module
 into its top-level node (``mlsgalerkin.integration``, ``mlsgalerkin.basis``, ...): a layer that
 imports another layer must not be imported by it, not even lazily.
 """
@@ -47,14 +48,6 @@ def module_names() -> dict[str, Path]:
     return out
 
 
-def _under_type_checking(node: ast.AST, parent: dict[ast.AST, ast.AST]) -> bool:
-    while node in parent:
-        node = parent[node]
-        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
-            return True
-    return False
-
-
 def import_edges(modules: dict[str, Path], moved: bool = False) -> set[tuple[str, str]]:
     """``(importer, imported)`` pairs of modules of the package (packages count as modules);
     without ``moved``, the lazy imports of :data:`MOVED_NAMES` (and the package ``__init__`` they
@@ -68,7 +61,6 @@ def import_edges(modules: dict[str, Path], moved: bool = False) -> set[tuple[str
     edges = set()
     for name, path in modules.items():
         tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
-        parent = {child: node for node in ast.walk(tree) for child in ast.iter_child_nodes(node)}
         package = name if path.name == "__init__.py" else name.rpartition(".")[0]
         for node in ast.walk(tree):
             if isinstance(node, ast.Import):
@@ -81,8 +73,6 @@ def import_edges(modules: dict[str, Path], moved: bool = False) -> set[tuple[str
                     source = node.module or ""
                 targets = [source] + [f"{source}.{a.name}" for a in node.names]
             else:
-                continue
-            if _under_type_checking(node, parent):
                 continue
             if not moved and any(name == a and t.startswith(b) for a, b in MOVED_NAMES for t in targets):
                 continue
@@ -212,3 +202,24 @@ def test_the_run_loop_knows_no_physics():
     bad = sorted((a, b) for a, b in import_edges(module_names())
                  if a.startswith(layer) and b.startswith(("mlsgalerkin.fluid", "mlsgalerkin.problems")))
     assert not bad, f"the run loop imports physics: {bad}"
+
+
+def test_type_only_imports_are_edges(tmp_path):
+    """An import under ``if TYPE_CHECKING:`` is an edge (the checker would otherwise miss a circle)."""
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "a.py").write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from mlsgalerkin.scene import Scene\n")
+    edges = import_edges({"mlsgalerkin.x": pkg / "a.py", "mlsgalerkin.scene": pkg / "a.py"})
+    assert ("mlsgalerkin.x", "mlsgalerkin.scene") in edges
+
+
+def test_solvers_effects_and_interactions_know_no_scene():
+    """No solver, effect or interaction module imports the run layer (``scene``, ``simulation``,
+    ``monitors``), not even for a type: they get their bodies, their scheme and a
+    :class:`~mlsgalerkin.dynamics.SceneView`."""
+    below = ("mlsgalerkin.fluid", "mlsgalerkin.structure", "mlsgalerkin.contact", "mlsgalerkin.interactions",
+             "mlsgalerkin.dynamics", "mlsgalerkin.run_state")
+    run_layer = ("mlsgalerkin.scene", "mlsgalerkin.simulation", "mlsgalerkin.monitors", "mlsgalerkin.problem")
+    bad = sorted((a, b) for a, b in import_edges(module_names())
+                 if a.startswith(below) and b.startswith(run_layer))
+    assert not bad, f"solver, effect or interaction modules import the run layer: {bad}"

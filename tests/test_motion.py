@@ -9,7 +9,17 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mlsgalerkin.fluid import FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, WallBody, Walls, lattice
+from mlsgalerkin.fluid import (
+    FluidBody,
+    Gravity,
+    MonaghanViscosity,
+    Phase,
+    TaitPressure,
+    WallBody,
+    Walls,
+    lattice,
+)
+from mlsgalerkin.fluid.scheme import FluidScheme
 from mlsgalerkin.motion import Oscillation, PrescribedMotion
 from mlsgalerkin.scene import Scene, SceneError
 from mlsgalerkin.simulation import Simulation
@@ -75,8 +85,8 @@ def _flap_scene(motion, t_end=0.02):
                      normals=np.tile([0.0, 1.0], (30 * 3, 1)))
     flap_x = lattice((-0.03, 0.0), (0.0, 0.15), dx)
     flap = WallBody("flap", flap_x, dx, normals=np.tile([1.0, 0.0], (len(flap_x), 1)), motion=motion)
-    return Scene([water, floor, flap], [TaitPressure(15.0), Gravity((0.0, -9.81)), Walls("free_slip"),
-                                        MonaghanViscosity(0.1)], t_end=t_end), flap_x
+    return Scene([water, floor, flap], [FluidScheme([TaitPressure(15.0), Gravity((0.0, -9.81)), Walls("free_slip"),
+                                        MonaghanViscosity(0.1)])], t_end=t_end), flap_x
 
 
 def test_a_rotating_wall_moves_its_particles_velocities_accelerations_and_normals():

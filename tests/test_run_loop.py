@@ -18,6 +18,7 @@ import pytest
 
 from mlsgalerkin.dynamics import Body, Diagnosis, Interaction, Solver, Surface, SystemState
 from mlsgalerkin.fluid import FluidBody, MonaghanViscosity, Phase, TaitPressure
+from mlsgalerkin.fluid.scheme import FluidScheme
 from mlsgalerkin.monitors import Monitor
 from mlsgalerkin.scene import Scene, SceneError
 from mlsgalerkin.simulation import Simulation
@@ -69,10 +70,10 @@ class PointMassSolver(Solver):
     key = "point_masses"
 
     @classmethod
-    def problems(cls, bodies, scene) -> list[str]:
+    def problems(cls, bodies, scheme, scene) -> list[str]:
         return [f"point mass {b.name!r}: mass must be positive" for b in bodies if not b.mass > 0]
 
-    def __init__(self, bodies, scene) -> None:
+    def __init__(self, bodies, scheme, scene) -> None:
         self.bodies = bodies
         self.index = {b.name: i for i, b in enumerate(bodies)}
         self._state = PointMassState(np.array([b.position for b in bodies], dtype=float),
@@ -190,8 +191,7 @@ def _scene(t_end=0.02, dt=2e-4):
     bob = PointMass("bob", np.array([1.0, 0.0]), mass=0.1, k=4.0e6, anchor=np.array([1.0, 0.0]),
                     velocity=np.array([0.3, 0.0]))
     tether = Tether("ball", "blob", k=50.0)
-    scene = Scene([blob, ball, bob], [TaitPressure(10.0), MonaghanViscosity(0.1)], t_end=t_end,
-                  mass="particle", dt_max=dt, interactions=[tether])
+    scene = Scene([blob, ball, bob], [FluidScheme([TaitPressure(10.0), MonaghanViscosity(0.1)], mass="particle", dt_max=dt)], t_end=t_end, interactions=[tether])
     scene.monitors = [MomentumLog(tether)]
     return scene, tether
 

@@ -9,10 +9,20 @@ import math
 
 import numpy as np
 import pytest
-
-from mlsgalerkin.fluid import FluidBody, Gravity, MonaghanViscosity, Phase, TaitEOS, TaitPressure, Walls, wall_box
-from mlsgalerkin.fluid.sensors import pressure_at, sensor_points
 from mlsgalerkin.problems import dam_break_impact as impact
+
+from mlsgalerkin.fluid import (
+    FluidBody,
+    Gravity,
+    MonaghanViscosity,
+    Phase,
+    TaitEOS,
+    TaitPressure,
+    Walls,
+    wall_box,
+)
+from mlsgalerkin.fluid.scheme import FluidScheme
+from mlsgalerkin.fluid.sensors import pressure_at, sensor_points
 from mlsgalerkin.scene import Scene
 from mlsgalerkin.simulation import Simulation
 
@@ -25,8 +35,7 @@ def settled_tank(depth=0.3, width=0.3, dx=0.015, t_end=0.3):
     water = FluidBody.block("water", (0.0, 0.0), (width, depth), dx, [Phase("water", 1000.0)])
     water.density[:] = eos.density(1000.0 * G * (depth - water.positions[:, 1]))
     walls = wall_box((0.0, 0.0), (width, 2 * depth), dx, layers=3)
-    scene = Scene([water, walls], [TaitPressure(c0), Gravity(), Walls("free_slip"), MonaghanViscosity(0.1)],
-                  t_end=t_end, name="tank")
+    scene = Scene([water, walls], [FluidScheme([TaitPressure(c0), Gravity(), Walls("free_slip"), MonaghanViscosity(0.1)])], t_end=t_end, name="tank")
     return Simulation(scene).run(out=None, progress=False).state.fluid
 
 

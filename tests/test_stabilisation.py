@@ -30,7 +30,11 @@ from mlsgalerkin.fluid import (
     wall_box,
 )
 from mlsgalerkin.fluid.corrected_gradient import ratio_gradient, ratio_gradient_reference
-from mlsgalerkin.fluid.density_diffusion import density_diffusion_rate, density_diffusion_rate_reference
+from mlsgalerkin.fluid.density_diffusion import (
+    density_diffusion_rate,
+    density_diffusion_rate_reference,
+)
+from mlsgalerkin.fluid.scheme import FluidScheme
 from mlsgalerkin.fluid.shifting import shift_vectors, shift_vectors_reference
 from mlsgalerkin.kernels import get_kernel
 from mlsgalerkin.neighbors import find_neighbors
@@ -42,6 +46,11 @@ DX = 0.01
 H = 1.3 * DX
 G = 9.81
 
+
+
+def _scheme_options(kw: dict) -> dict:
+    """Take the fluid scheme's options (approximation, integrator, mass, safety, dt_max) out of ``kw``."""
+    return {k: kw.pop(k) for k in ("approximation", "integrator", "mass", "safety", "dt_max") if k in kw}
 
 def cloud(nx=12, ny=10, jitter=0.0, seed=0, walls=False):
     """A block of fluid particles (``nx × ny``, spacing DX; a free surface on every side unless
@@ -195,7 +204,7 @@ def tank(effects, dx=0.02, depth=0.3, width=0.3, t_end=0.2, **kw) -> Scene:
     water.density[:] = eos.density(1000.0 * G * (depth - water.positions[:, 1]))
     walls = wall_box((0.0, 0.0), (width, 2.0 * depth), dx, layers=3)   # rows on the lattice
     listed = [TaitPressure(c0), Gravity(), Walls("free_slip"), MonaghanViscosity(0.02)] + list(effects)
-    return Scene([water, walls], listed, t_end=t_end, name="tank", **kw)
+    return Scene([water, walls], [FluidScheme(listed, **_scheme_options(kw))], t_end=t_end, name="tank", **kw)
 
 
 def test_tank_with_diffusion_and_shifting_stays_at_rest():
@@ -293,7 +302,10 @@ def test_residual_monaghan_matches_reference_and_spares_linear_flows():
     """``residual=True`` damps only the deviation of the pair velocity from the linear field
     ``½(L_i + L_j) x_ij``: no force in a uniformly compressing flow, the same numba/numpy
     result as the plain form otherwise."""
-    from mlsgalerkin.fluid.pair_viscosity import monaghan_viscosity_force, monaghan_viscosity_force_reference
+    from mlsgalerkin.fluid.pair_viscosity import (
+        monaghan_viscosity_force,
+        monaghan_viscosity_force_reference,
+    )
 
     x, h, M, rho, rho0, phase, nb, nf = cloud(jitter=0.15, seed=2)
     A = np.array([[-3.0, 1.0], [0.5, -2.0]])                  # a compressing linear flow (1/s)

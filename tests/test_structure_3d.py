@@ -9,10 +9,12 @@ import pytest
 from skfem import MeshHex, MeshTet
 
 from mlsgalerkin.fluid import FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure
+from mlsgalerkin.fluid.scheme import FluidScheme
 from mlsgalerkin.interactions import PenaltyContact
 from mlsgalerkin.scene import Scene
 from mlsgalerkin.simulation import Simulation
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial
+from mlsgalerkin.structure.scheme import StructureScheme
 
 L, H, E, P = 1.0, 0.1, 1e7, 10.0
 
@@ -53,8 +55,7 @@ def test_a_3d_water_block_lands_on_a_clamped_plate():
     plate = ElasticBody("plate", mesh, ElasticMaterial(1e7, 0.3, 1000.0), "Hex1", clamped=edge,
                         wet=lambda x: np.isclose(x[2], 0.0), points={"mid": (0.1, 0.1, -0.005)})
     water = FluidBody.block("water", (0.07, 0.07, 0.005), (0.13, 0.13, 0.065), dx, [Phase("water", 1000.0)])
-    scene = Scene([water, plate], [TaitPressure(10.0), Gravity((0.0, 0.0, -9.81)), MonaghanViscosity(0.1)],
-                  t_end=0.1, interactions=[PenaltyContact("water", "plate", thickness=0.5 * dx)])
+    scene = Scene([water, plate], [FluidScheme([TaitPressure(10.0), Gravity((0.0, 0.0, -9.81)), MonaghanViscosity(0.1)])], t_end=0.1, interactions=[PenaltyContact("water", "plate", thickness=0.5 * dx)])
     res = Simulation(scene).run(progress=False)
     ts = res.timeseries
     assert res.summary["status"] == "completed"
@@ -83,7 +84,7 @@ def test_3d_rigid_body_on_a_hinge_swings_with_its_dry_period():
                       gravity=(0.0, 0.0, -9.81), angular_velocity=0.1)
     expected = 2 * np.pi / np.sqrt((200.0 - m * 9.81 * L / 2) / (m * (L**2 + t**2) / 12 + m * (L / 2) ** 2))
     assert plank.natural_period() == pytest.approx(expected, rel=1e-12)
-    res = Simulation(Scene([plank], [], t_end=3 * expected, dt_max=expected / 200)).run(progress=False)
+    res = Simulation(Scene([plank], [StructureScheme(dt_max=expected / 200)], t_end=3 * expected)).run(progress=False)
     ts = res.timeseries
     t_, a = np.asarray(ts["time"]), np.asarray(ts["plank_angle"])
     k = np.flatnonzero((a[:-1] < 0) & (a[1:] >= 0))
@@ -99,7 +100,7 @@ def test_3d_rigid_body_falls_vertically():
 
     box = RigidBody("box", _box((0, 0, 1.0), (0.2, 0.2, 1.2)), 5.0, 0.1, (0.1, 0.1, 1.1), constraint="vertical",
                     gravity=(0.0, 0.0, -9.81))
-    res = Simulation(Scene([box], [], t_end=0.2, dt_max=1e-3)).run(progress=False)
+    res = Simulation(Scene([box], [StructureScheme(dt_max=1e-3)], t_end=0.2)).run(progress=False)
     body = res.state.systems["structure"].body("box")
     assert body.V == pytest.approx([0.0, 0.0, -9.81 * 0.2], abs=1e-9)
     assert body.c[2] - 1.1 == pytest.approx(-0.5 * 9.81 * 0.2**2, rel=1e-6)
@@ -136,10 +137,11 @@ def test_free_3d_asymmetric_top_keeps_its_energy_and_angular_momentum():
     2e-6 (measured 6.9e-7, O(Δt²)) without drift (the means over the first and the last 1000
     steps differ by 1.5e-9 of E0, asserted below 1e-7; a linear fit gives −1.7e-10 per 100 s);
     the rotation matrix stays orthonormal with det 1 to 1e-12 (measured 2e-15)."""
-    from mlsgalerkin.structure.integrators import RigidMotion, quaternion_matrix
+    from mlsgalerkin.structure.steppers import FreeRigidMotion
+    from mlsgalerkin.structure.steppers.rotation import quaternion_matrix
 
     J = np.array([1.0, 2.0, 3.0])
-    m = RigidMotion(_free_box(J, (0.01, 1.0, 0.01)))
+    m = FreeRigidMotion(_free_box(J, (0.01, 1.0, 0.01)))
     m.start()
     E0, L0 = m.kinetic_energy(), m.L.copy()
     energy, spin_y, L_err, orth = [], [], 0.0, 0.0
@@ -171,11 +173,11 @@ def test_free_3d_spin_about_a_principal_axis(axis):
     the axis of smallest or largest moment stays (the perturbation stays within 3e-3 rad/s,
     measured 2.0e-3 and 1.4e-3) and about the intermediate axis it does not (it tumbles: the
     other components reach O(1))."""
-    from mlsgalerkin.structure.integrators import RigidMotion
+    from mlsgalerkin.structure.steppers import FreeRigidMotion
 
     w0 = np.zeros(3)
     w0[axis] = 2.0
-    m = RigidMotion(_free_box((1.0, 2.0, 3.0), w0))
+    m = FreeRigidMotion(_free_box((1.0, 2.0, 3.0), w0))
     m.start()
     for _ in range(4000):
         m.advance(0.01)
@@ -185,7 +187,7 @@ def test_free_3d_spin_about_a_principal_axis(axis):
     assert m.angle() == pytest.approx(min(turned, 2 * np.pi - turned), abs=1e-9)
     perturbed = np.full(3, 1e-3)
     perturbed[axis] = 2.0
-    p = RigidMotion(_free_box((1.0, 2.0, 3.0), perturbed))
+    p = FreeRigidMotion(_free_box((1.0, 2.0, 3.0), perturbed))
     p.start()
     off = 0.0
     for _ in range(4000):
@@ -207,14 +209,14 @@ def test_free_3d_rotation_against_eulers_equations():
     from scipy.integrate import solve_ivp
     from scipy.spatial.transform import Rotation
 
-    from mlsgalerkin.structure.integrators import RigidMotion
+    from mlsgalerkin.structure.steppers import FreeRigidMotion
 
     J, w0, T = np.array([1.0, 2.0, 3.0]), np.array([0.2, 1.0, 0.3]), 2.0
     ref = solve_ivp(lambda t, w: np.cross(J * w, w) / J, (0.0, T), w0, rtol=1e-10, atol=1e-12, dense_output=True)
 
     def error(dt, inertia=J, turn=None):
         turn = np.eye(3) if turn is None else turn
-        m = RigidMotion(_free_box(inertia, turn @ w0))
+        m = FreeRigidMotion(_free_box(inertia, turn @ w0))
         m.start()
         worst = 0.0
         for k in range(round(T / dt)):
@@ -237,17 +239,17 @@ def test_free_3d_body_falls_with_its_spin_unchanged():
     2e-8 relative (measured 5.0e-9: the rotational energy's O((|ω|Δt)²) oscillation; the fall
     itself is exact), and the surface's velocities and accelerations are ``V + ω × r`` and
     ``A + α × r + ω × (ω × r)``."""
-    from mlsgalerkin.structure.integrators import RigidMotion
+    from mlsgalerkin.structure.steppers import FreeRigidMotion
 
     w0, g, t = (0.3, -0.5, 2.0), 9.81, 0.2
     body = _free_box((0.1, 0.15, 0.2), w0, name="box", gravity=(0.0, 0.0, -g))
-    res = Simulation(Scene([body], [], t_end=t, dt_max=1e-3)).run(progress=False)
+    res = Simulation(Scene([body], [StructureScheme(dt_max=1e-3)], t_end=t)).run(progress=False)
     m = res.state.systems["structure"].body("box")
     assert res.state.t == pytest.approx(t, rel=1e-12)
     assert m.V == pytest.approx([0.0, 0.0, -g * t], abs=1e-12)
     assert m.c == pytest.approx([0.0, 0.0, -0.5 * g * t**2], abs=1e-12)
     ts = res.timeseries
-    spin = RigidMotion(_free_box((0.1, 0.15, 0.2), w0))
+    spin = FreeRigidMotion(_free_box((0.1, 0.15, 0.2), w0))
     spin.start()
     now = 0.0
     while now < t * (1 - 1e-12):         # the loop's steps: dt_max, the last one ending on t_end
@@ -275,10 +277,10 @@ def test_free_3d_constant_torque_about_a_principal_axis():
     (1e-13), the angle turned is 0.5 t + M t²/(2I), the angular acceleration the surface sees
     is M/I, and the work of the couple equals the gain of kinetic energy (1e-12 relative).
     Measured: all at round-off (ω_z 3e-15 relative, angle 5e-15 rad, work 1.2e-14)."""
-    from mlsgalerkin.structure.integrators import RigidMotion
+    from mlsgalerkin.structure.steppers import FreeRigidMotion
 
     M, I3, w0, dt, n = 0.6, 3.0, 0.5, 0.01, 200
-    m = RigidMotion(_free_box((1.0, 2.0, I3), (0.0, 0.0, w0)))
+    m = FreeRigidMotion(_free_box((1.0, 2.0, I3), (0.0, 0.0, w0)))
     m.add_forces(_couple(m, M))
     assert m.F == pytest.approx([0.0, 0.0, 0.0], abs=1e-15)
     assert m.M == pytest.approx([0.0, 0.0, M], abs=1e-15)
@@ -314,10 +316,10 @@ def test_free_3d_checkpoint_continues_bit_for_bit(tmp_path):
     """``checkpoint`` after 17 loaded steps, ``restore`` into a new motion, 23 more steps: the
     same bits as 40 steps in one go (orientation, angular momentum, ω, α, the centre, the work,
     every observable); and a run of the whole loop restarted from its checkpoint likewise."""
-    from mlsgalerkin.structure.integrators import RigidMotion
+    from mlsgalerkin.structure.steppers import FreeRigidMotion
 
     def fresh():
-        m = RigidMotion(_free_box(np.array([[0.2, 0.01, 0.0], [0.01, 0.3, -0.02], [0.0, -0.02, 0.4]]),
+        m = FreeRigidMotion(_free_box(np.array([[0.2, 0.01, 0.0], [0.01, 0.3, -0.02], [0.0, -0.02, 0.4]]),
                                   (1.0, -2.0, 3.0), gravity=(0.0, 0.0, -9.81), velocity=(0.1, 0.0, 0.0)))
         m.start()
         return m
@@ -327,7 +329,7 @@ def test_free_3d_checkpoint_continues_bit_for_bit(tmp_path):
     first = fresh()
     _loaded_free_body_steps(first, 17)
     saved = first.checkpoint()
-    second = RigidMotion(first.body)
+    second = FreeRigidMotion(first.body)
     second.restore(saved)
     _loaded_free_body_steps(second, 23, start=17)
     assert straight.substeps > straight.outer_steps   # |ω|Δt ≈ 0.075 > 0.05: it sub-cycles
@@ -336,8 +338,7 @@ def test_free_3d_checkpoint_continues_bit_for_bit(tmp_path):
     assert straight.observables() == second.observables()
 
     def scene():
-        return Scene([_free_box((0.1, 0.15, 0.2), (0.3, -0.5, 2.0), name="box", gravity=(0.0, 0.0, -9.81))], [],
-                     t_end=0.05, dt_max=1e-3)
+        return Scene([_free_box((0.1, 0.15, 0.2), (0.3, -0.5, 2.0), name="box", gravity=(0.0, 0.0, -9.81))], [StructureScheme(dt_max=1e-3)], t_end=0.05)
 
     whole = Simulation(scene()).run(progress=False)
     Simulation(scene()).run(out=tmp_path, progress=False, max_steps=17)
@@ -526,11 +527,8 @@ def _water_on_a_3d_plate(t_end: float, ny: int = 10, nx: int = 5):
     walls = WallBody("sides", sides, dx, normals=nrm, reference_density=rho)
     coupling = StructureCoupling("water", "plate", walls="plate_walls", thickness=0.25 * dx, wall_acceleration=1.0)
     n = water.n
-    scene = Scene([water, walls, riding, plate],
-                  [TaitPressure(c0), Gravity((0.0, 0.0, -g)), Walls("free_slip"), MonaghanViscosity(0.2),
-                   DensityFilter(20)],
-                  t_end=t_end, approximation=Approximation(h_factor=1.3), interactions=[coupling],
-                  probes=[Probe("lowest_water", lambda state: float(state.fluid.x[:n, 2].min()))])
+    scene = Scene([water, walls, riding, plate], [FluidScheme([TaitPressure(c0), Gravity((0.0, 0.0, -g)), Walls("free_slip"), MonaghanViscosity(0.2),
+                   DensityFilter(20)], approximation=Approximation(h_factor=1.3))], t_end=t_end, interactions=[coupling], probes=[Probe("lowest_water", lambda state: float(state.fluid.x[:n, 2].min()))])
     return scene, plate, water.n * rho * dx**3 * g, rho * g * H
 
 

@@ -198,7 +198,7 @@ def test_an_undamped_coupled_run_does_not_gain_energy():
     mod = load_problem("hydrostatic_plate")
     p = mod.Parameters(dx=0.05, t_end=0.2, alpha=0.0)
     scene = mod.make_scene(p)
-    scene.effects = [e for e in scene.effects if type(e).__name__ != "DensityFilter"]
+    scene.schemes[0].effects = [e for e in scene.schemes[0].effects if type(e).__name__ != "DensityFilter"]
     ts = Simulation(scene).run(progress=False).timeseries
     contact = [k for k in ts if k == "penalty_energy" or k.endswith("contact_energy")]
     assert contact, "the contact's stored energy is a time-series column"

@@ -237,8 +237,8 @@ def moderate_3d(basis: Basis, rng: np.random.Generator) -> np.ndarray:
 
 
 def test_lame_parameters_by_dimension():
-    """2D: the plane-strain pair (plane stress refused); 3D: ``lame3d``, whatever ``plane`` says."""
-    assert lame_for_dimension(MATERIAL_3D, 3) == MATERIAL_3D.lame3d() == pytest.approx((LAM, MU))
+    """2D: the plane-strain pair (plane stress refused); 3D: ``lame(3)``, whatever ``plane`` says."""
+    assert lame_for_dimension(MATERIAL_3D, 3) == MATERIAL_3D.lame(3) == pytest.approx((LAM, MU))
     stress = ElasticMaterial(1e7, 0.3, 1000.0, plane="stress")
     assert lame_for_dimension(stress, 3) == pytest.approx((LAM, MU))
     assert lame_for_dimension(MATERIAL_3D, 2) == plane_strain_lame(MATERIAL_3D)
@@ -281,7 +281,7 @@ def test_3d_numba_force_matches_the_scikit_fem_linear_form(element, model, rng):
 @pytest.mark.parametrize("model", MODELS)
 @pytest.mark.parametrize("element", ELEMENTS_3D)
 def test_3d_small_displacements_give_the_linear_stiffness_of_the_body(element, model, rng):
-    """For tiny u the force is ``ElasticBody.stiffness @ u`` of the same 3D body (``lame3d``), and
+    """For tiny u the force is ``ElasticBody.stiffness @ u`` of the same 3D body (``lame(3)``), and
     the tangent at rest is that stiffness."""
     body = make_body_3d(element)
     basis = body.basis
@@ -378,10 +378,10 @@ def test_3d_nonlinear_body_is_explicit_only():
 def test_3d_neo_hookean_cantilever_under_a_small_tip_load_matches_the_linear_answer():
     """A 1 m Hex2 cantilever of 0.1 m square section (10 × 1 × 1 cells), neo-Hookean, a 10 N shear
     traction on its free end (tip deflection 0.4 % of its length), stepped by the explicit
-    integrator of :class:`ElasticMotion` (sub-cycled central differences, 1 ms outer steps) with
+    stepper :class:`CentralDifference` (sub-cycled central differences, 1 ms outer steps) with
     Rayleigh mass damping ``a0 = 2 ω₁``: after ``10/ω₁`` the tip is within 1 % of the linear
     static answer of the same body (measured −0.05 %), and the strain energy is ½ f·u."""
-    from mlsgalerkin.structure.integrators import ElasticMotion
+    from mlsgalerkin.structure.steppers import CentralDifference
 
     L, H, P = 1.0, 0.1, 10.0
     mesh = MeshHex.init_tensor(np.linspace(0.0, L, 11), np.linspace(0.0, H, 2), np.linspace(0.0, H, 2))
@@ -393,7 +393,7 @@ def test_3d_neo_hookean_cantilever_under_a_small_tip_load_matches_the_linear_ans
     tip_linear = lin.point_displacements(static)["tip"][1]
     omega1 = lin.lowest_frequency()
     body = ElasticBody("beam", mesh, mat, "Hex2", model="neo_hookean", damping=(2.0 * omega1, 0.0), **kw)
-    motion = ElasticMotion(body)
+    motion = CentralDifference(body)
     motion.f[:] = load                       # the surface forces held over every step
     motion.start()
     dt = 1e-3

@@ -10,10 +10,11 @@ import pytest
 from skfem import MeshQuad
 
 from mlsgalerkin.contact import ContactSurface
-from mlsgalerkin.scene import Scene, SceneError
+from mlsgalerkin.scene import Probe, Scene, SceneError
 from mlsgalerkin.simulation import Simulation
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial, Hinge, RigidBody
 from mlsgalerkin.structure.explicit import subcycle_linear, subcycle_linear_reference
+from mlsgalerkin.structure.scheme import StructureScheme
 
 #: The clamped beam of the dam break on an elastic wall (Sun 2016): E = 0.2 GPa, 6 mm thick,
 #: 47.16 kg/m (ρ = 7860 kg/m³), 0.304 m long; Euler–Bernoulli first period 0.5977 s (0.5971 s quoted).
@@ -37,7 +38,7 @@ def test_spring_hinged_rigid_beam_dry_period():
     (measured −0.005 % at Δt = 1 ms, 20 sub-steps of ω δt ≤ 0.05); energy within 0.1 %."""
     beam = hinged_beam()
     beam.angular_velocity = 0.1
-    res = Simulation(Scene([beam], [], t_end=1.0, dt_max=1e-3)).run(progress=False)
+    res = Simulation(Scene([beam], [StructureScheme(dt_max=1e-3)], t_end=1.0)).run(progress=False)
     ts = res.timeseries
     period = np.diff(crossings(ts["time"], ts["beam_angle"])).mean()
     assert abs(period - 0.1879) < 0.01 * 0.1879
@@ -61,7 +62,7 @@ def test_clamped_beam_free_vibration_period_and_energy(integrator, dt):
     energy within 0.5 % over 10 periods: explicit with sub-cycling inside each outer step, and
     implicit Newmark (average acceleration conserves energy exactly for a linear system)."""
     b = clamped_beam(integrator)
-    sim = Simulation(Scene([b], [], t_end=6.0, dt_max=dt))
+    sim = Simulation(Scene([b], [StructureScheme(dt_max=dt)], t_end=6.0))
     m = sim.solver("structure").state.body("wall")
     m.u[:] = b.static(b.edge_traction(lambda x: np.isclose(x[1], L), (10.0 / H, 0.0)))
     res = sim.run(progress=False)
@@ -108,7 +109,7 @@ def test_nonlinear_cantilever_under_its_weight_settles_near_the_linear_answer():
     static = lin.point_displacements(lin.static(lin.weight))["tip"][1]
     omega1 = 3.5160 * np.sqrt(1e8 / (1 - 0.09) * 0.1**2 / 12 / 1000.0)   # first bending frequency (rad/s)
     body = ElasticBody("beam", mesh, mat, model="stvenant_kirchhoff", damping=(1.2 * omega1, 0.0), **kw)
-    res = Simulation(Scene([body], [], t_end=0.3, dt_max=1e-3)).run(progress=False)
+    res = Simulation(Scene([body], [StructureScheme(dt_max=1e-3)], t_end=0.3)).run(progress=False)
     tip = res.timeseries["beam_tip_uy"][-1]
     assert abs(static) > 1e-3 and abs(tip - static) < 0.01 * abs(static)
 
@@ -117,7 +118,7 @@ def test_structure_restart_continues_bit_for_bit(tmp_path):
     def scene():
         beam = hinged_beam()
         beam.angular_velocity = 0.2
-        return Scene([beam, clamped_beam()], [], t_end=0.05, dt_max=1e-3)
+        return Scene([beam, clamped_beam()], [StructureScheme(dt_max=1e-3)], t_end=0.05)
 
     straight = Simulation(scene()).run(progress=False)
     Simulation(scene()).run(out=tmp_path, progress=False, max_steps=17)
@@ -130,7 +131,7 @@ def test_structure_restart_continues_bit_for_bit(tmp_path):
 
 
 def test_bad_structure_input_is_refused_clearly():
-    with pytest.raises(SceneError, match="needs an outer time step: set dt_max"):
+    with pytest.raises(SceneError, match=r"needs an outer time step: list StructureScheme\(dt_max=...\)"):
         Simulation(Scene([hinged_beam()], [], t_end=0.1))
     mesh = MeshQuad.init_tensor(np.linspace(0, 1, 3), np.linspace(0, 1, 3))
     mat = ElasticMaterial(1e7, 0.3, 1000.0)
@@ -143,7 +144,7 @@ def test_bad_structure_input_is_refused_clearly():
     with pytest.raises(ValueError, match="outside the mesh"):
         ElasticBody("b", mesh, mat, points={"far": (3.0, 3.0)})
     with pytest.raises(SceneError, match="Newmark needs a clamped boundary"):
-        Simulation(Scene([ElasticBody("b", mesh, mat, integrator="newmark")], [], t_end=0.1, dt_max=1e-3))
+        Simulation(Scene([ElasticBody("b", mesh, mat, integrator="newmark")], [StructureScheme(dt_max=1e-3)], t_end=0.1))
     square = ContactSurface.polyline([(0, 0), (1, 0), (1, 1), (0, 1), (0, 0)])
     with pytest.raises(ValueError, match="mass must be positive"):
         RigidBody("r", square, 0.0, 1.0, (0.5, 0.5))
@@ -151,3 +152,16 @@ def test_bad_structure_input_is_refused_clearly():
         RigidBody.beam("b", (0, 0), 2.0, 1.0, 0.02, constraint=Hinge((0, 0), stiffness=5.0), gravity=(0, -9.81))
     with pytest.raises(ValueError, match="constraint must be one of"):
         RigidBody("r", square, 1.0, 1.0, (0.5, 0.5), constraint="sliding")
+
+
+def test_a_probe_reads_a_body_by_name():
+    """``state.body(name)`` is the public way for a probe to read a structure (elastic: ``u``, ``v``;
+    rigid: ``X``, ``V``, ``theta``, ``F``); an unknown name says which bodies have a live state."""
+    beam = hinged_beam()
+    beam.angular_velocity = 0.1
+    seen = []
+    probe = Probe("angle_read", lambda state: seen.append(state.body("beam").theta) or seen[-1])
+    res = Simulation(Scene([beam], [StructureScheme(dt_max=1e-3)], t_end=0.01, probes=[probe])).run(progress=False)
+    assert np.array_equal(res.timeseries["angle_read"], res.timeseries["beam_angle"])
+    with pytest.raises(KeyError, match=r"no body 'nope' with a live state in this run; bodies with one: \['beam'\]"):
+        res.state.body("nope")

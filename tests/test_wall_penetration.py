@@ -9,7 +9,12 @@ import numpy as np
 import pytest
 
 from mlsgalerkin.fluid import FluidBody, Gravity, Phase, TaitPressure, Walls, lattice, wall_box
-from mlsgalerkin.fluid.penetration import penetration_depths, penetration_depths_reference, surface_offsets
+from mlsgalerkin.fluid.penetration import (
+    penetration_depths,
+    penetration_depths_reference,
+    surface_offsets,
+)
+from mlsgalerkin.fluid.scheme import FluidScheme
 from mlsgalerkin.fluid.solver import WallPenetrationWarning
 from mlsgalerkin.neighbors import find_neighbors
 from mlsgalerkin.scene import Scene
@@ -49,8 +54,7 @@ def test_penetration_is_reported_in_time_series_summary_and_warned():
     # one particle already 0.7 spacings inside the floor, midway between two columns of wall
     # particles: more than half a spacing from each, so the geometry check lets it through
     water.positions[3] = (0.03, -0.7 * DX)
-    scene = Scene([water, wall_box((0.0, 0.0), (0.1, 0.1), DX)], [TaitPressure(10.0), Gravity(), Walls()],
-                  t_end=0.002)
+    scene = Scene([water, wall_box((0.0, 0.0), (0.1, 0.1), DX)], [FluidScheme([TaitPressure(10.0), Gravity(), Walls()])], t_end=0.002)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         res = Simulation(scene).run(progress=False)

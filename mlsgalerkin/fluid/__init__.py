@@ -11,6 +11,9 @@ module                                 contents
                                        kinematics, dynamics, time step, checkpoints
 :mod:`~mlsgalerkin.fluid.integrators`  :class:`KickDriftKick`, :class:`PredictorCorrector`
 :mod:`~mlsgalerkin.fluid.effect`       the :class:`Effect` contract and its stages
+:mod:`~mlsgalerkin.fluid.scheme`       :class:`FluidScheme`: effects, approximation, integrator,
+                                       mass, safety, ``dt_max``, spacing; :class:`FluidContext`
+:mod:`~mlsgalerkin.fluid.presets`      :func:`water`: the recommended scheme for water
 :mod:`~mlsgalerkin.fluid.eos`          the Tait equation and :class:`TaitPressure`
 :mod:`~mlsgalerkin.fluid.gravity`      :class:`Gravity`
 :mod:`~mlsgalerkin.fluid.viscosity`    :class:`NewtonianViscosity`, :class:`BulkViscosity`
@@ -67,6 +70,8 @@ from mlsgalerkin.fluid.gravity import Gravity
 from mlsgalerkin.fluid.integrators import Integrator, KickDriftKick, PredictorCorrector
 from mlsgalerkin.fluid.pair_viscosity import MonaghanViscosity, NumericalViscosityWarning, numerical_viscosity
 from mlsgalerkin.fluid.penalty_walls import PenaltyWalls
+from mlsgalerkin.fluid.presets import water
+from mlsgalerkin.fluid.scheme import FluidContext, FluidScheme
 from mlsgalerkin.fluid.shifting import ParticleShifting
 from mlsgalerkin.fluid.stabilisation import SHIFTING_MODES, stabilisation
 from mlsgalerkin.fluid.solver import FluidSolver
@@ -89,6 +94,8 @@ __all__ = [
     "DensityFilter",
     "Effect",
     "FluidBody",
+    "FluidContext",
+    "FluidScheme",
     "FluidSolver",
     "FluidState",
     "FreeSurfaceDetection",
@@ -126,6 +133,7 @@ __all__ = [
     "tait_stored_energy",
     "viscous_limit",
     "wall_box",
+    "water",
 ]
 
 

@@ -65,13 +65,12 @@ from numba import prange
 from numpy.typing import NDArray
 
 from mlsgalerkin.assembly import integration_terms, integration_terms_reference
-from mlsgalerkin.fluid.effect import Effect
+from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.kernels import Kernel, get_kernel, kernel_f_df
 
 if TYPE_CHECKING:  # pragma: no cover
     from mlsgalerkin.approximation.table import ShapeTable
-    from mlsgalerkin.scene import Scene
 
 __all__ = ["ConsistentIntegration", "shepard_sum", "shepard_sum_reference", "consistency_force",
            "consistency_force_reference", "fade"]
@@ -180,14 +179,14 @@ class ConsistentIntegration(Effect):
     def __repr__(self) -> str:
         return f"ConsistentIntegration(none={self.none:g}, full={self.full:g})"
 
-    def check(self, scene: "Scene") -> list[str]:
+    def check(self, ctx: EffectContext) -> list[str]:
         if not (0.0 < self.none < self.full <= 1.0):
             return [f"ConsistentIntegration: need 0 < none < full <= 1 (Shepard sums), got none = {self.none:g}, "
                     f"full = {self.full:g}; the defaults are 0.80 and 0.88"]
         return []
 
-    def setup(self, state: FluidState, scene: "Scene") -> None:
-        self._kernel = get_kernel(scene.approximation.kernel)
+    def setup(self, state: FluidState, ctx: EffectContext) -> None:
+        self._kernel = get_kernel(ctx.approximation.kernel)
 
     def force(self, s: FluidState) -> None:
         volume = np.ascontiguousarray(s.volume)

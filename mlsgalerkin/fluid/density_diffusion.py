@@ -39,7 +39,7 @@ times the acoustic limit for ``δ = 0.1``. A numba kernel with a numpy reference
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numba
 import numpy as np
@@ -47,13 +47,10 @@ from numba import prange
 from numpy.typing import NDArray
 
 from mlsgalerkin.fluid.corrected_gradient import GRADIENT_FIELD, ratio_gradient, ratio_gradient_mls
-from mlsgalerkin.fluid.effect import Effect, check_positive
+from mlsgalerkin.fluid.effect import Effect, EffectContext, check_positive
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.fluid.time_step import density_diffusion_limit
 from mlsgalerkin.kernels import get_kernel, kernel_f_df
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
 
 __all__ = ["CORRECTIONS", "DensityDiffusion", "density_diffusion_rate", "density_diffusion_rate_reference"]
 
@@ -187,7 +184,7 @@ class DensityDiffusion(Effect):
     def __repr__(self) -> str:
         return f"DensityDiffusion(delta={self.delta:g}, correction={self.correction!r}, gradient={self.gradient!r})"
 
-    def check(self, scene: "Scene") -> list[str]:
+    def check(self, ctx: EffectContext) -> list[str]:
         problems: list[str] = []
         check_positive("DensityDiffusion", "delta", self.delta, problems)
         if self.gradient not in GRADIENTS:
@@ -195,19 +192,18 @@ class DensityDiffusion(Effect):
         if self.correction not in CORRECTIONS:
             problems.append(f"DensityDiffusion: correction must be one of {sorted(CORRECTIONS)}, got "
                             f"{self.correction!r}")
-        if not any(getattr(e, "role", "") == "pressure" and hasattr(e, "c0") for e in scene.effects):
+        if ctx.sound_speed() is None:
             problems.append("DensityDiffusion needs a pressure model with a reference sound speed c0 "
                             "(TaitPressure)")
-        if self.correction == "hydrostatic" and not any("gravity" in getattr(e, "provides", ()) for e in scene.effects):
+        if self.correction == "hydrostatic" and not ctx.provides("gravity"):
             problems.append("DensityDiffusion(correction='hydrostatic') subtracts the hydrostatic density "
                             "difference: list Gravity, or use correction='gradient'")
         return problems
 
-    def setup(self, state: FluidState, scene: "Scene") -> None:
-        self._kernel = get_kernel(scene.approximation.kernel)
-        pressure = next(e for e in scene.effects if getattr(e, "role", "") == "pressure" and hasattr(e, "c0"))
-        self.c0 = float(pressure.c0)
-        self._gamma = float(getattr(pressure, "gamma", 7.0))
+    def setup(self, state: FluidState, ctx: EffectContext) -> None:
+        self._kernel = get_kernel(ctx.approximation.kernel)
+        self.c0 = state.c0
+        self._gamma = state.gamma
         self._h = float(state.h[state.fluid].max()) if state.n_fluid else math.nan
         if self.correction == "gradient":
             state.extra[GRADIENT_FIELD] = np.zeros_like(state.x)

@@ -25,7 +25,9 @@ drift         at the start of the next step's drift (positions ``xⁿ``, step ``
 
 Effects talk to each other only through the :class:`~mlsgalerkin.fluid.state.FluidState`:
 an effect that provides a quantity writes it into the state in :meth:`Effect.setup` or a
-stage (``Gravity`` sets ``state.gravity``, which the wall pressure reads), and validation
+stage (``Gravity`` sets ``state.gravity``, which the wall pressure reads; the pressure model,
+set up first, sets the reference sound speed ``state.c0`` that density diffusion, shifting and
+the pair viscosity scale with), and validation
 checks that every name an effect ``reads`` is provided by the solver or a listed effect.
 Each effect supplies its own time-step limit (the formulas are in
 :mod:`mlsgalerkin.fluid.time_step`); the solver takes the minimum. The solver provides
@@ -34,28 +36,73 @@ Each effect supplies its own time-step limit (the formulas are in
 Writing a new effect: subclass :class:`Effect`, set ``name``, ``stages``, ``reads`` and
 ``provides``, implement the stage methods (they receive the state and modify its arrays in
 place), and optionally ``check`` (validation before step 1), ``setup``, ``time_step_limit``,
-``summary``, ``state_dict``/``load_state_dict``. See ``docs/howto/write_a_scene_and_an_effect.md``.
+``summary``, ``state_dict``/``load_state_dict``. ``check`` and ``setup`` receive an
+:class:`EffectContext` (the fluid's :class:`~mlsgalerkin.fluid.scheme.FluidScheme` and a read-only
+view of the scene), never the scene itself. See ``docs/howto/write_a_scene_and_an_effect.md``.
 """
 
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol, Sequence
 
 import numpy as np
 
+from mlsgalerkin.approximation.settings import Approximation
 from mlsgalerkin.fluid.state import FluidState
 
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
-
-__all__ = ["SOLVER_QUANTITIES", "STAGES", "Effect", "check_nonnegative", "check_positive"]
+__all__ = ["SOLVER_QUANTITIES", "STAGES", "Effect", "EffectContext", "check_nonnegative", "check_positive"]
 
 STAGES = ("kinematics", "continuity", "pressure", "boundary", "stress", "force", "after_step", "drift")
 SOLVER_QUANTITIES = frozenset({
     "positions", "velocity", "density", "mass", "volume", "velocity_gradient",
     "shape_functions", "neighbors", "continuity_rate",
 })
+
+
+class EffectContext(Protocol):
+    """What an effect sees in :meth:`Effect.check` and :meth:`Effect.setup` (read only):
+    :class:`~mlsgalerkin.fluid.scheme.FluidContext` implements it."""
+
+    @property
+    def dim(self) -> int:
+        """Dimension of the scene's bodies."""
+
+    @property
+    def effects(self) -> Sequence["Effect"]:
+        """Every listed effect of the fluid, in order."""
+
+    @property
+    def approximation(self) -> Approximation:
+        """Kernel, smoothing length, basis and method of the fluid."""
+
+    @property
+    def safety(self) -> float:
+        """Factor on the stable time step."""
+
+    @property
+    def dt_max(self) -> float | None:
+        """Largest time step (s), if set."""
+
+    @property
+    def interactions(self) -> tuple:
+        """The scene's interactions."""
+
+    @property
+    def probes(self) -> tuple:
+        """The scene's probes."""
+
+    def bodies_of(self, kind: type) -> list:
+        """The scene's bodies of ``kind``, in scene order."""
+
+    def pressure_model(self) -> "Effect | None":
+        """The listed pressure model, if any."""
+
+    def sound_speed(self) -> float | None:
+        """The pressure model's reference sound speed ``c0`` (m/s), if it has one."""
+
+    def provides(self, quantity: str) -> bool:
+        """Whether a listed effect provides ``quantity``."""
 
 
 class Effect:
@@ -67,11 +114,12 @@ class Effect:
     provides: tuple[str, ...] = ()
     role: str = "other"  # "pressure" for the pressure model (exactly one per scene)
 
-    def check(self, scene: "Scene") -> list[str]:
-        """Problems with this effect in ``scene`` (empty if none); called before step 1."""
+    def check(self, ctx: EffectContext) -> list[str]:
+        """Problems with this effect in the fluid's scheme and scene ``ctx`` (empty if none);
+        called before step 1. Reads only."""
         return []
 
-    def setup(self, state: FluidState, scene: "Scene") -> None:
+    def setup(self, state: FluidState, ctx: EffectContext) -> None:
         """Precompute what the effect needs once the particle state exists; write what it
         ``provides`` into the state."""
 

@@ -22,17 +22,14 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mlsgalerkin.fluid.effect import Effect, check_positive
+from mlsgalerkin.fluid.effect import Effect, EffectContext, check_positive
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.fluid.time_step import acoustic_limit
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
 
 __all__ = [
     "MachNumberWarning",
@@ -234,7 +231,7 @@ class TaitPressure(Effect):
     def __repr__(self) -> str:
         return f"TaitPressure(c0={self.c0:g}, gamma={self.gamma:g})"
 
-    def check(self, scene: "Scene") -> list[str]:
+    def check(self, ctx: EffectContext) -> list[str]:
         problems: list[str] = []
         if self.c0_arg is None and self.u_max is None:
             problems.append("TaitPressure: give c0 (sound speed) or u_max (expected largest speed)")
@@ -246,15 +243,15 @@ class TaitPressure(Effect):
         if self.negative_pressure not in NEGATIVE_PRESSURE_MODES:
             problems.append(f"TaitPressure: negative_pressure must be one of {NEGATIVE_PRESSURE_MODES}, got "
                             f"{self.negative_pressure!r}")
-        if self.negative_pressure == "free_surface" and not any(
-                "free_surface" in getattr(e, "provides", ()) for e in scene.effects):
+        if self.negative_pressure == "free_surface" and not ctx.provides("free_surface"):
             problems.append("TaitPressure(negative_pressure='free_surface') floors the density of the free-surface "
                             "particles: list FreeSurfaceDetection(), which flags them")
         if not problems and self.u_max is not None:
             TaitEOS(1.0, self.c0, self.gamma).check_mach(self.u_max)
         return problems
 
-    def setup(self, state: FluidState, scene: "Scene") -> None:
+    def setup(self, state: FluidState, ctx: EffectContext) -> None:
+        state.c0, state.gamma = float(self.c0), float(self.gamma)
         state.c = np.full(state.n, self.c0)
 
     def pressure(self, s: FluidState) -> None:

@@ -11,18 +11,15 @@ reference (:func:`mls_ratio_filter_reference`).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numba
 import numpy as np
 from numba import prange
 
-from mlsgalerkin.fluid.effect import Effect
+from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.kernels import get_kernel, kernel_f_df
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
 
 __all__ = ["DensityFilter", "mls_ratio_filter", "mls_ratio_filter_reference", "shepard_ratio_filter"]
 
@@ -109,7 +106,7 @@ class DensityFilter(Effect):
     def __repr__(self) -> str:
         return f"DensityFilter(every={self.every}, method={self.method!r})"
 
-    def check(self, scene: "Scene") -> list[str]:
+    def check(self, ctx: EffectContext) -> list[str]:
         problems = []
         if not (isinstance(self.every, (int, np.integer)) and self.every >= 1):
             problems.append(f"DensityFilter: every must be a positive integer, got {self.every!r}")
@@ -117,8 +114,8 @@ class DensityFilter(Effect):
             problems.append(f"DensityFilter: method must be 'mls' or 'shepard', got {self.method!r}")
         return problems
 
-    def setup(self, state: FluidState, scene: "Scene") -> None:
-        self._kernel = scene.approximation.kernel
+    def setup(self, state: FluidState, ctx: EffectContext) -> None:
+        self._kernel = ctx.approximation.kernel
 
     def after_step(self, s: FluidState) -> None:
         if s.step % self.every:

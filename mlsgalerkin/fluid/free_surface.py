@@ -62,19 +62,16 @@ True
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numba
 import numpy as np
 from numba import prange
 from numpy.typing import ArrayLike, NDArray
 
-from mlsgalerkin.fluid.effect import Effect
+from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.neighbors import NeighborTable, as_coordinates
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
 
 __all__ = [
     "FreeSurfaceDetection",
@@ -412,15 +409,15 @@ class FreeSurfaceDetection(Effect):
     def __repr__(self) -> str:
         return f"FreeSurfaceDetection(method={self.method!r}, every={self.every})"
 
-    def check(self, scene: "Scene") -> list[str]:
+    def check(self, ctx: EffectContext) -> list[str]:
         problems = []
         if self.method not in ("circle", "cheap"):
             problems.append(f"FreeSurfaceDetection: method must be 'circle' or 'cheap', got {self.method!r}")
-        if self.method == "circle" and scene.dim != 2:
+        if self.method == "circle" and ctx.dim != 2:
             problems.append("FreeSurfaceDetection: the circle-coverage test is 2D; use method='cheap' in 3D")
         return problems
 
-    def setup(self, state: FluidState, scene: "Scene") -> None:
+    def setup(self, state: FluidState, ctx: EffectContext) -> None:
         state.extra["free_surface"] = np.zeros(state.n, dtype=bool)
 
     def after_step(self, s: FluidState) -> None:

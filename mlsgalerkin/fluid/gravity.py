@@ -2,16 +2,11 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mlsgalerkin.fluid.effect import Effect
+from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
 
 __all__ = ["Gravity"]
 
@@ -37,12 +32,12 @@ class Gravity(Effect):
     def __repr__(self) -> str:
         return f"Gravity(g={self.g.tolist()})"
 
-    def check(self, scene: "Scene") -> list[str]:
-        if self.g.ndim != 1 or self.g.size != scene.dim or not np.all(np.isfinite(self.g)):
-            return [f"Gravity: g must be a finite ({scene.dim},) vector, got {self.g.tolist()}"]
+    def check(self, ctx: EffectContext) -> list[str]:
+        if self.g.ndim != 1 or self.g.size != ctx.dim or not np.all(np.isfinite(self.g)):
+            return [f"Gravity: g must be a finite ({ctx.dim},) vector, got {self.g.tolist()}"]
         return []
 
-    def setup(self, state: FluidState, scene: "Scene") -> None:
+    def setup(self, state: FluidState, ctx: EffectContext) -> None:
         state.gravity = self.g.copy()
 
     def force(self, s: FluidState) -> None:

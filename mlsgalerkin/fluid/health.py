@@ -11,22 +11,43 @@ neighbour count, so that a user can see *where* a run broke.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mlsgalerkin.dynamics import Diagnosis
 
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.fluid.state import FluidState
+__all__ = ["HINT", "ParticleArrays", "diagnose"]
 
-__all__ = ["HINT", "diagnose"]
+
+class ParticleArrays(Protocol):
+    """What the check reads of a particle state (the :class:`~mlsgalerkin.fluid.state.FluidState`
+    has it): positions ``x`` (m), velocities ``v`` (m/s), accelerations ``a`` (m/s²), ``(n, d)``;
+    densities ``rho`` and reference densities ``rho0`` (kg/m³), sound speeds ``c`` (m/s), ``(n,)``;
+    the fluid rows ``fluid`` and their count ``n_fluid``; the neighbour table ``neighbors``; each
+    body's rows ``bodies``; the step and time."""
+
+    x: NDArray[np.float64]
+    v: NDArray[np.float64]
+    a: NDArray[np.float64]
+    rho: NDArray[np.float64]
+    rho0: NDArray[np.float64]
+    c: NDArray[np.float64] | None
+    n_fluid: int
+    neighbors: Any
+    bodies: dict[str, slice]
+    step: int
+    t: float
+
+    @property
+    def fluid(self) -> slice: ...
 
 #: What to try when a fluid state is unsound.
-HINT = "Try a smaller time step (scene.safety or dt_max), more artificial viscosity, or a finer resolution."
+HINT = "Try a smaller time step (the fluid scheme's safety or dt_max), more artificial viscosity, or a finer resolution."
 
 
-def diagnose(s: "FluidState", density_ratio: tuple[float, float], max_speed: float | None) -> Diagnosis | None:
+def diagnose(s: ParticleArrays, density_ratio: tuple[float, float], max_speed: float | None) -> Diagnosis | None:
     """``None`` if the fluid state is sound, else the :class:`~mlsgalerkin.dynamics.Diagnosis` of
     the first bad particle (``point="particle"``, its index among all particles; ``extras``:
     ``neighbours``, its neighbour count, -1 before the first neighbour search)."""
@@ -52,7 +73,7 @@ def diagnose(s: "FluidState", density_ratio: tuple[float, float], max_speed: flo
     return None
 
 
-def _diagnosis(s: "FluidState", k: int, quantity: str, value: Any, what: str,
+def _diagnosis(s: ParticleArrays, k: int, quantity: str, value: Any, what: str,
                limit: float | tuple[float, float] | None) -> Diagnosis:
     body = next((name for name, sl in s.bodies.items() if sl.start <= k < sl.stop), "?")
     nnb = int(s.neighbors.indptr[k + 1] - s.neighbors.indptr[k]) if s.neighbors is not None else -1

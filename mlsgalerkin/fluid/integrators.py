@@ -25,12 +25,38 @@ does both, for a fluid on its own.
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, ClassVar
+from typing import Any, ClassVar, Protocol
 
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.fluid.solver import FluidSolver
+__all__ = ["INTEGRATORS", "Integrator", "KickDriftKick", "PredictorCorrector", "Steppable", "make_integrator"]
 
-__all__ = ["INTEGRATORS", "Integrator", "KickDriftKick", "PredictorCorrector", "make_integrator"]
+
+class Steppable(Protocol):
+    """What an integrator drives: the :class:`~mlsgalerkin.fluid.solver.FluidSolver`'s two halves of
+    a force evaluation, its drift effects, its walls, its state and its stage timer."""
+
+    @property
+    def state(self) -> Any:
+        """The :class:`~mlsgalerkin.fluid.state.FluidState` (flat particle arrays)."""
+
+    timer: Any
+
+    def kinematics(self) -> None:
+        """Neighbours, shape functions, velocity gradient and continuity rate at the current positions."""
+
+    def dynamics(self) -> None:
+        """Pressure, stress, forces and accelerations."""
+
+    def evaluate(self) -> None:
+        """Both halves."""
+
+    def continuity_rate(self, reuse_added: bool = False) -> None:
+        """``ρ̇`` (kg/m³/s, (n,), into the state) at the current velocities with the last table."""
+
+    def drift_effects(self, dt: float) -> None:
+        """Displacements of the drift-stage effects (particle shifting) added before the drift."""
+
+    def move_walls(self, t: float) -> None:
+        """Walls with a prescribed motion to time ``t`` (s)."""
 
 
 class Integrator:
@@ -40,15 +66,15 @@ class Integrator:
     #: Force evaluations per step (for cost estimates).
     evaluations: ClassVar[int] = 1
 
-    def begin(self, solver: "FluidSolver", t: float, dt: float) -> None:
+    def begin(self, solver: Steppable, t: float, dt: float) -> None:
         """From ``t`` up to the positions at ``t + dt``."""
         raise NotImplementedError
 
-    def end(self, solver: "FluidSolver", t: float, dt: float) -> None:
+    def end(self, solver: Steppable, t: float, dt: float) -> None:
         """Forces at ``t + dt`` and the rest of the step."""
         raise NotImplementedError
 
-    def advance(self, solver: "FluidSolver", t: float, dt: float) -> None:
+    def advance(self, solver: Steppable, t: float, dt: float) -> None:
         """One whole step (no interactions in between)."""
         self.begin(solver, t, dt)
         self.end(solver, t, dt)
@@ -62,7 +88,7 @@ class KickDriftKick(Integrator):
 
     name = "kdk"
 
-    def begin(self, solver: "FluidSolver", t: float, dt: float) -> None:
+    def begin(self, solver: Steppable, t: float, dt: float) -> None:
         s = solver.state
         f = s.fluid
         t0 = time.perf_counter()
@@ -80,7 +106,7 @@ class KickDriftKick(Integrator):
         solver.move_walls(t + dt)
         solver.timer.add("integrate", t0)
 
-    def end(self, solver: "FluidSolver", t: float, dt: float) -> None:
+    def end(self, solver: Steppable, t: float, dt: float) -> None:
         s = solver.state
         f = s.fluid
         # kinematics here, after the exchange: walls riding on a structure are where the
@@ -99,7 +125,7 @@ class PredictorCorrector(Integrator):
     name = "predictor_corrector"
     evaluations = 2
 
-    def begin(self, solver: "FluidSolver", t: float, dt: float) -> None:
+    def begin(self, solver: Steppable, t: float, dt: float) -> None:
         s = solver.state
         f = s.fluid
         solver.drift_effects(dt)  # particle shifting at xⁿ (moves x by δr, re-interpolates v and ρ)
@@ -118,7 +144,7 @@ class PredictorCorrector(Integrator):
         solver.move_walls(t + dt)
         solver.timer.add("integrate", t0)
 
-    def end(self, solver: "FluidSolver", t: float, dt: float) -> None:
+    def end(self, solver: Steppable, t: float, dt: float) -> None:
         solver.evaluate()
 
 

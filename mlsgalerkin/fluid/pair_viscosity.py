@@ -50,21 +50,18 @@ from __future__ import annotations
 
 import math
 import warnings
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numba
 import numpy as np
 from numba import prange
 from numpy.typing import ArrayLike, NDArray
 
-from mlsgalerkin.fluid.effect import Effect, check_nonnegative
+from mlsgalerkin.fluid.effect import Effect, EffectContext, check_nonnegative
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.fluid.time_step import pair_viscosity_limit
 from mlsgalerkin.kernels import Kernel, get_kernel, kernel_f_df
 from mlsgalerkin.neighbors import NeighborTable, as_coordinates
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
 
 __all__ = [
     "MonaghanViscosity",
@@ -365,7 +362,7 @@ class MonaghanViscosity(Effect):
         extra += "" if self.flow is None else f", flow={tuple(self.flow)!r}"
         return f"MonaghanViscosity(alpha={self.alpha:g}, beta={self.beta:g}{extra})"
 
-    def check(self, scene: "Scene") -> list[str]:
+    def check(self, ctx: EffectContext) -> list[str]:
         problems: list[str] = []
         check_nonnegative("MonaghanViscosity", "alpha", self.alpha, problems)
         check_nonnegative("MonaghanViscosity", "beta", self.beta, problems)
@@ -376,13 +373,12 @@ class MonaghanViscosity(Effect):
                                 f"{self.flow!r}")
         return problems
 
-    def setup(self, state: FluidState, scene: "Scene") -> None:
-        self._kernel = get_kernel(scene.approximation.kernel)
+    def setup(self, state: FluidState, ctx: EffectContext) -> None:
+        self._kernel = get_kernel(ctx.approximation.kernel)
         self._active = np.zeros(state.n, dtype=bool)
         self._active[state.fluid] = True
         self._no_gradient = np.zeros((1, state.dim, state.dim))
-        pressure = next((e for e in scene.effects if getattr(e, "role", "") == "pressure" and hasattr(e, "c0")), None)
-        c0 = float(pressure.c0) if pressure is not None else math.nan
+        c0 = state.c0  # NaN without a pressure model that has one
         h = float(np.mean(state.h[state.fluid])) if state.n_fluid else math.nan
         self.nu = numerical_viscosity(self.alpha, h, c0, state.dim)
         if self.flow is not None and not self.residual:

@@ -53,7 +53,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -61,11 +61,8 @@ from numpy.typing import ArrayLike
 from mlsgalerkin.contact.law import PenaltyLaw
 from mlsgalerkin.contact.penalty import DEFAULT_ALPHA, DEFAULT_DAMPING, DEFAULT_FEATURE_ANGLE, check_penalty_parameters
 from mlsgalerkin.fluid.bodies import FluidBody, WallBody
-from mlsgalerkin.fluid.effect import Effect
+from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
 
 __all__ = ["PenaltyWalls", "SurfaceOnlyWallWarning", "sensor_columns"]
 
@@ -151,17 +148,17 @@ class PenaltyWalls(Effect):
                 f"moment_about={about!r})")
 
     # ------------------------------------------------------------------ validation
-    def check(self, scene: "Scene") -> list[str]:
+    def check(self, ctx: EffectContext) -> list[str]:
         out = check_penalty_parameters("PenaltyWalls", self.alpha, self.damping, self.thickness, self.reach,
                                        self.feature_angle, self.dt_ref)
-        walls = [w for w in scene.bodies_of(WallBody) if w.surface is not None]
+        walls = [w for w in ctx.bodies_of(WallBody) if w.surface is not None]
         if not walls:
             out.append("PenaltyWalls: no wall body has a penalty surface; give one a surface (wall_box(..., "
                        "surface=True), or WallBody(..., surface=ContactSurface.tank(...))) or remove PenaltyWalls")
         for w in walls:
-            if w.surface.dim != scene.dim:
+            if w.surface.dim != ctx.dim:
                 out.append(f"PenaltyWalls: the surface of wall body {w.name!r} is {w.surface.dim}D but the scene is "
-                           f"{scene.dim}D")
+                           f"{ctx.dim}D")
         names = {w.name for w in walls}
         about = self.moment_about
         points = about.items() if isinstance(about, dict) else ([("all walls", about)] if about is not None else [])
@@ -170,11 +167,11 @@ class PenaltyWalls(Effect):
                 out.append(f"PenaltyWalls: moment_about names {key!r}, which is not a wall body with a surface "
                            f"({sorted(names)})")
             p = np.asarray(point, dtype=float) if np.ndim(point) else np.zeros(0)
-            if p.shape != (scene.dim,) or not np.all(np.isfinite(p)):
-                out.append(f"PenaltyWalls: moment_about for {key} must be a finite ({scene.dim},) point, got {point!r}")
+            if p.shape != (ctx.dim,) or not np.all(np.isfinite(p)):
+                out.append(f"PenaltyWalls: moment_about for {key} must be a finite ({ctx.dim},) point, got {point!r}")
         if out:
             return out
-        fluids = scene.bodies_of(FluidBody)
+        fluids = ctx.bodies_of(FluidBody)
         if fluids and walls:
             out.extend(self._starting_penetrations(fluids, walls))
         return out
@@ -206,8 +203,8 @@ class PenaltyWalls(Effect):
         return g0, reach
 
     # ------------------------------------------------------------------ set-up
-    def setup(self, state: FluidState, scene: "Scene") -> None:
-        walls = [w for w in scene.bodies_of(WallBody) if w.surface is not None]
+    def setup(self, state: FluidState, ctx: EffectContext) -> None:
+        walls = [w for w in ctx.bodies_of(WallBody) if w.surface is not None]
         self._walls = [w.name for w in walls]
         bare = [w.name for w in walls if w.n == 0]
         if bare:
@@ -227,8 +224,8 @@ class PenaltyWalls(Effect):
         for name in self._walls:
             point = about.get(name) if isinstance(about, dict) else about
             self._centre[name] = np.zeros(d) if point is None else np.asarray(point, dtype=float)
-        self._others = [e for e in scene.effects if e is not self]
-        self._safety, self._dt_max = scene.safety, scene.dt_max
+        self._others = [e for e in ctx.effects if e is not self]
+        self._safety, self._dt_max = ctx.safety, ctx.dt_max
         self._spacing = state.spacing
         self._dim = d
         for name in self._walls:
@@ -253,7 +250,7 @@ class PenaltyWalls(Effect):
         law = self.law
         law.fix_reference_step(lambda: self._reference_step(s), lambda dt: (
             "PenaltyWalls: no reference time step for the penalty stiffness (no other effect limits the step, got "
-            f"{dt!r}); give PenaltyWalls(dt_ref=...) or scene.dt_max"))
+            f"{dt!r}); give PenaltyWalls(dt_ref=...) or the fluid scheme's dt_max"))
         f = s.fluid
         x, v, M = s.x[f], s.v[f], s.M[f]
         contacts = 0

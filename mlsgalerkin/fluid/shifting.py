@@ -63,7 +63,7 @@ uninterrupted run. A numba kernel with a numpy reference.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numba
 import numpy as np
@@ -71,14 +71,14 @@ from numba import prange
 from numpy.typing import NDArray
 
 from mlsgalerkin.fluid.corrected_gradient import (
-    GRADIENT_FIELD, ratio_gradient, ratio_gradient_mls, symmetric_min_eigenvalue,
+    GRADIENT_FIELD,
+    ratio_gradient,
+    ratio_gradient_mls,
+    symmetric_min_eigenvalue,
 )
-from mlsgalerkin.fluid.effect import Effect, check_positive
+from mlsgalerkin.fluid.effect import Effect, EffectContext, check_positive
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.kernels import get_kernel, kernel_f_df
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
 
 __all__ = ["ParticleShifting", "shift_vectors", "shift_vectors_reference"]
 
@@ -280,7 +280,7 @@ class ParticleShifting(Effect):
                 f"splash={self.splash:g}, surface={self.surface:g}, max_shift={self.max_shift:g}, "
                 f"every={self.every})")
 
-    def check(self, scene: "Scene") -> list[str]:
+    def check(self, ctx: EffectContext) -> list[str]:
         problems: list[str] = []
         for name in ("beta", "max_shift"):
             check_positive("ParticleShifting", name, getattr(self, name), problems)
@@ -289,7 +289,7 @@ class ParticleShifting(Effect):
                 problems.append(f"ParticleShifting: speed must be a number (m/s), 'local' or None, got {self.speed!r}")
         elif self.speed is not None:
             check_positive("ParticleShifting", "speed", self.speed, problems)
-        elif not any(getattr(e, "role", "") == "pressure" and hasattr(e, "c0") for e in scene.effects):
+        elif ctx.sound_speed() is None:
             problems.append("ParticleShifting: give speed (the largest expected speed, m/s) or list a pressure "
                             "model with a sound speed c0 (TaitPressure)")
         if not (isinstance(self.every, (int, np.integer)) and self.every >= 1):
@@ -301,18 +301,16 @@ class ParticleShifting(Effect):
             problems.append(f"ParticleShifting: need 0 <= splash < surface, got {self.splash!r}, {self.surface!r}")
         return problems
 
-    def setup(self, state: FluidState, scene: "Scene") -> None:
-        self._kernel = get_kernel(scene.approximation.kernel)
-        pressure = next((e for e in scene.effects if getattr(e, "role", "") == "pressure" and hasattr(e, "c0")), None)
-        self._c0 = float(pressure.c0) if pressure is not None else math.nan
-        self._gamma = float(getattr(pressure, "gamma", 7.0))
+    def setup(self, state: FluidState, ctx: EffectContext) -> None:
+        self._kernel = get_kernel(ctx.approximation.kernel)
+        self._c0 = state.c0          # NaN without a pressure model that has one
+        self._gamma = state.gamma
         if self.speed == "local":
             self._U = math.nan
         elif self.speed is not None:
             self._U = float(self.speed)
         else:
-            pressure = next(e for e in scene.effects if getattr(e, "role", "") == "pressure" and hasattr(e, "c0"))
-            self._U = 0.1 * float(pressure.c0)
+            self._U = 0.1 * state.c0
 
     def drift(self, s: FluidState, dt: float) -> None:
         self._elapsed += dt

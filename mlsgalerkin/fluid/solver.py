@@ -11,7 +11,8 @@ advance the density between them:
    the listed forces, ``a = f/m``.
 
 The time integrator (:mod:`mlsgalerkin.fluid.integrators`) is chosen once from
-``Scene.integrator``; the mass option (:mod:`mlsgalerkin.fluid.mass`) from ``Scene.mass``.
+``FluidScheme.integrator``; the mass option (:mod:`mlsgalerkin.fluid.mass`) from
+``FluidScheme.mass``.
 Walls with a prescribed motion (their particles and penalty surfaces) are moved to each
 evaluation's time before its kinematics.
 Only the listed effects are ever called: each stage calls the effects that declared it.
@@ -23,32 +24,29 @@ import logging
 import math
 import time
 import warnings
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from mlsgalerkin.approximation.build import evaluate_shape_functions
 from mlsgalerkin.assembly import internal_force_and_mass, velocity_gradient_divergence
-from mlsgalerkin.dynamics import Solver, Surface
+from mlsgalerkin.dynamics import SceneView, Solver, Surface
 from mlsgalerkin.fluid.bodies import FluidBody, WallBody
 from mlsgalerkin.fluid.effect import SOLVER_QUANTITIES, STAGES, Effect
 from mlsgalerkin.fluid.geometry import geometry_problems
 from mlsgalerkin.fluid.integrators import make_integrator
 from mlsgalerkin.fluid.penetration import PENETRATION_WARNING, penetration_depths, surface_offsets
 from mlsgalerkin.fluid.mass import (
-    MASS_OPTIONS,
     consistent_acceleration,
     floor_lumped_mass,
     warn_consistent_unconverged,
 )
+from mlsgalerkin.fluid.scheme import SPACING_TOLERANCE, FluidContext, FluidScheme
 from mlsgalerkin.fluid.state import CHECKPOINT_ARRAYS, FluidState, WallSurfaceState
 from mlsgalerkin.fluid.time_step import force_limit
 from mlsgalerkin.io.files import to_jsonable
 from mlsgalerkin.kernels import get_kernel
 from mlsgalerkin.neighbors import find_neighbors
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
 
 __all__ = ["FluidSolver", "StageTimer", "WallPenetrationWarning", "build_state"]
 
@@ -138,17 +136,18 @@ class FluidSolver(Solver):
 
     Built by :class:`~mlsgalerkin.simulation.Simulation` from the scene's
     :class:`~mlsgalerkin.fluid.bodies.FluidBody` and :class:`~mlsgalerkin.fluid.bodies.WallBody`
-    bodies, its effects and its fluid options (``approximation``, ``integrator``, ``mass``,
-    ``safety``, ``dt_max``).
+    bodies and the fluid's :class:`~mlsgalerkin.fluid.scheme.FluidScheme` (effects,
+    ``approximation``, ``integrator``, ``mass``, ``safety``, ``dt_max``, ``spacing``).
     """
 
     key = "fluid"
-    takes_effects = True
+    scheme_class = FluidScheme
 
     # ------------------------------------------------------------------ validation
     @classmethod
-    def problems(cls, bodies: list, scene: "Scene") -> list[str]:
-        """Every problem with the fluid part of ``scene`` (bodies, options, effects)."""
+    def problems(cls, bodies: list, scheme: FluidScheme, scene: SceneView) -> list[str]:
+        """Every problem with the fluid bodies, the effects of ``scheme`` and their spacing
+        (the scheme's options alone are checked by :meth:`FluidScheme.problems`)."""
         out: list[str] = []
         fluids = [b for b in bodies if isinstance(b, FluidBody)]
         if not fluids:
@@ -156,27 +155,17 @@ class FluidSolver(Solver):
         spacings = {b.spacing for b in fluids}
         if len(spacings) > 1:
             out.append(f"fluid bodies must share one particle spacing, got {sorted(spacings)}")
-        if scene.dt_max is not None and not scene.dt_max > 0:
-            out.append(f"dt_max must be positive, got {scene.dt_max!r}")
-        if not (0 < scene.safety <= 1.5):
-            out.append(f"safety factor must be in (0, 1.5], got {scene.safety!r}")
-        try:
-            make_integrator(scene.integrator)
-        except ValueError as err:
-            out.append(str(err))
-        if scene.mass not in MASS_OPTIONS:
-            out.append(f"mass must be 'lumped', 'particle' or 'consistent', got {scene.mass!r}")
-        out.extend(scene.approximation.problems())
+        out.extend(cls._spacing_problems(bodies, scheme, fluids))
         for w in (b for b in bodies if isinstance(b, WallBody) and b.motion is not None):
             out.extend(f"wall body {w.name!r}: {p}" for p in w.motion.check(w.dim))
         if fluids and len({b.dim for b in bodies}) == 1:
-            g = next((np.asarray(e.g, dtype=float) for e in scene.effects
+            g = next((np.asarray(e.g, dtype=float) for e in scheme.effects
                       if "gravity" in getattr(e, "provides", ()) and hasattr(e, "g")), None)
             if g is not None and g.shape != (fluids[0].dim,):
                 g = None  # reported by the effect's own check
             out.extend(geometry_problems(fluids, [b for b in bodies if isinstance(b, WallBody) and b.n], g))
 
-        effects = list(scene.effects)
+        effects = list(scheme.effects)
         for e in effects:
             if not isinstance(e, Effect):
                 out.append(f"unknown effect {e!r}: effects must be Effect instances")
@@ -220,24 +209,47 @@ class FluidSolver(Solver):
             if missing:
                 out.append(f"probe {p.name!r} reads {missing}, which no listed effect provides")
         if scene.dim:
+            ctx = FluidContext(scheme, scene)
             for e in effects:
                 try:
-                    out.extend(e.check(scene))
+                    out.extend(e.check(ctx))
                 except Exception as exc:  # a check may depend on what failed above
                     out.append(f"{e!r}: check failed ({exc})")
         return out
 
+    @staticmethod
+    def _spacing_problems(bodies: list, scheme: FluidScheme, fluids: list) -> list[str]:
+        """The one particle spacing: the scheme's (if given) against the fluid bodies', and every
+        wall body with particles against it (wall particles are nodes of the fluid's
+        approximation, each integrating a ``spacing^d`` volume)."""
+        out: list[str] = []
+        dx = scheme.spacing if scheme.spacing is not None else (fluids[0].spacing if fluids else None)
+        if dx is None or not (isinstance(dx, (int, float)) and dx > 0):
+            return out
+        close = lambda a: abs(a - dx) <= SPACING_TOLERANCE * dx  # noqa: E731
+        if scheme.spacing is not None:
+            off = [f"{b.name!r} ({b.spacing:g} m)" for b in fluids if not close(b.spacing)]
+            if off:
+                out.append(f"fluid bodies {', '.join(off)} are not built at the scheme's spacing {dx:g} m; build them "
+                           "with the scheme's spacing, or give the scheme theirs")
+        for w in bodies:
+            if isinstance(w, WallBody) and w.n and w.spacing is not None and not close(w.spacing):
+                out.append(f"wall body {w.name!r} has particles {w.spacing:g} m apart but the fluid's spacing is "
+                           f"{dx:g} m: wall particles are nodes of the fluid's approximation; build the walls with "
+                           f"spacing {dx:g} (wall_box(..., {dx:g}), WallBody.on_surface(..., spacing={dx:g}))")
+        return out
+
     # ------------------------------------------------------------------ set-up
-    def __init__(self, bodies: list, scene: "Scene") -> None:
-        self.scene = scene
+    def __init__(self, bodies: list, scheme: FluidScheme, scene: SceneView) -> None:
+        self.scheme = scheme
         self.fluids = [b for b in bodies if isinstance(b, FluidBody)]
         self.walls = [b for b in bodies if isinstance(b, WallBody)]
-        ap = scene.approximation
+        ap = scheme.approximation
         self.approximation = ap
         self.kernel = get_kernel(ap.kernel)
-        self.integrator = make_integrator(scene.integrator)
-        self.mass_option = scene.mass
-        self.effects: list[Effect] = list(scene.effects)
+        self.integrator = make_integrator(scheme.integrator)
+        self.mass_option = scheme.mass
+        self.effects: list[Effect] = list(scheme.effects)
         self._state = build_state(self.fluids, self.walls, ap.h_factor)
         s = self._state
         s.approximation_order = ap.order
@@ -287,8 +299,11 @@ class FluidSolver(Solver):
                 else surface_offsets(w.positions, np.asarray(w.normals, dtype=float), w.spacing)
                 for w in particle_walls])
         self.penetration = {"max_depth_dx": 0.0, "max_count": 0, "time_of_max_depth_s": None, "warned": False}
-        for e in self.effects:
-            e.setup(s, scene)
+        # the pressure model first: it sets the reference sound speed the others read (state.c0)
+        ctx = FluidContext(scheme, scene)
+        pressure = scheme.pressure_model()
+        for e in ([pressure] if pressure is not None else []) + [e for e in self.effects if e is not pressure]:
+            e.setup(s, ctx)
         s.c = s.c if s.c is not None else np.zeros(s.n)
         self.move_walls(0.0)
         s.x_ref = s.x.copy()
@@ -481,9 +496,9 @@ class FluidSolver(Solver):
         limits = [e.time_step_limit(s) for e in self.effects]
         f = s.fluid
         limits.append(force_limit(s.h[f], s.a[f]))
-        dt = self.scene.safety * min(limits)
-        if self.scene.dt_max is not None:
-            dt = min(dt, self.scene.dt_max)
+        dt = self.scheme.safety * min(limits)
+        if self.scheme.dt_max is not None:
+            dt = min(dt, self.scheme.dt_max)
         # a NaN limit comes from a non-finite state: leave it to the watchdog, which names the
         # particle and the quantity
         if math.isinf(dt):

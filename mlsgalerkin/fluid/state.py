@@ -95,6 +95,10 @@ class FluidState:
     x_ref: NDArray[np.float64] = field(default=None)  # type: ignore[assignment]
     wall_acceleration: NDArray[np.float64] = field(default=None)  # type: ignore[assignment]
     gravity: NDArray[np.float64] | None = None
+    #: The pressure model's reference sound speed ``c0`` (m/s) and exponent ``γ``, written by it in
+    #: its set-up (before any other effect's): what the effects that scale with the sound speed read.
+    c0: float = float("nan")
+    gamma: float = 7.0
     approximation_order: int = 1
     # per-evaluation quantities (not checkpointed)
     neighbors: Any = None

@@ -4,17 +4,12 @@ viscosity. Both add to the stress ``σ`` of each integration point, so the Galer
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from mlsgalerkin.fluid.bodies import FluidBody
-from mlsgalerkin.fluid.effect import Effect, check_nonnegative
+from mlsgalerkin.fluid.effect import Effect, EffectContext, check_nonnegative
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.fluid.time_step import bulk_viscosity_limit, viscous_limit
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
 
 __all__ = ["BulkViscosity", "NewtonianViscosity"]
 
@@ -36,8 +31,8 @@ class NewtonianViscosity(Effect):
     def __repr__(self) -> str:
         return "NewtonianViscosity()"
 
-    def check(self, scene: "Scene") -> list[str]:
-        if not any(ph.viscosity > 0 for b in scene.bodies_of(FluidBody) for ph in b.phases):
+    def check(self, ctx: EffectContext) -> list[str]:
+        if not any(ph.viscosity > 0 for b in ctx.bodies_of(FluidBody) for ph in b.phases):
             return ["NewtonianViscosity: every phase has zero viscosity; set Phase(viscosity=...) "
                     "or remove the effect"]
         return []
@@ -76,7 +71,7 @@ class BulkViscosity(Effect):
     def __repr__(self) -> str:
         return f"BulkViscosity(linear={self.linear:g}, quadratic={self.quadratic:g})"
 
-    def check(self, scene: "Scene") -> list[str]:
+    def check(self, ctx: EffectContext) -> list[str]:
         problems: list[str] = []
         check_nonnegative("BulkViscosity", "linear", self.linear, problems)
         check_nonnegative("BulkViscosity", "quadratic", self.quadratic, problems)

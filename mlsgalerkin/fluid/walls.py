@@ -31,20 +31,15 @@ fixed wall has ``a_w = 0`` and the ``v_wall`` of its body (a moving belt if non-
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numba
 import numpy as np
 from numba import prange
 from numpy.typing import NDArray
 
 from mlsgalerkin.fluid.bodies import WallBody
-from mlsgalerkin.fluid.effect import Effect
+from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.kernels import get_kernel, kernel_f_df
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
 
 __all__ = ["SLIP_MODES", "Walls", "extrapolate_wall_state", "extrapolate_wall_state_reference"]
 
@@ -191,9 +186,9 @@ class Walls(Effect):
     def __repr__(self) -> str:
         return f"Walls(slip={self.slip!r})"
 
-    def check(self, scene: "Scene") -> list[str]:
+    def check(self, ctx: EffectContext) -> list[str]:
         problems = []
-        walls = [w for w in scene.bodies_of(WallBody) if w.n]
+        walls = [w for w in ctx.bodies_of(WallBody) if w.n]
         if self.slip not in SLIP_MODES:
             problems.append(f"Walls: slip must be one of {sorted(SLIP_MODES)}, got {self.slip!r}")
         if not walls:
@@ -204,8 +199,8 @@ class Walls(Effect):
                             "wall_box() provides them")
         return problems
 
-    def setup(self, state: FluidState, scene: "Scene") -> None:
-        self._kernel = get_kernel(scene.approximation.kernel)
+    def setup(self, state: FluidState, ctx: EffectContext) -> None:
+        self._kernel = get_kernel(ctx.approximation.kernel)
         self._ids = np.arange(state.n_fluid, state.n, dtype=np.int64)
         self._is_fluid = np.zeros(state.n, dtype=bool)
         self._is_fluid[state.fluid] = True

@@ -25,17 +25,14 @@ the last exchange (:mod:`mlsgalerkin.contact.penalty`).
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from mlsgalerkin.contact.law import PenaltyLaw
 from mlsgalerkin.contact.penalty import DEFAULT_ALPHA, DEFAULT_DAMPING, DEFAULT_FEATURE_ANGLE, check_penalty_parameters
-from mlsgalerkin.dynamics import Interaction, Solver
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
+from mlsgalerkin.dynamics import Interaction, SceneView, Solver
 
 __all__ = ["PenaltyContact"]
 
@@ -116,7 +113,7 @@ class PenaltyContact(Interaction):
                 f"dt_ref={self.dt_ref!r}, feature_angle={self.feature_angle!r}, moment_about={about!r})")
 
     # ------------------------------------------------------------------ validation
-    def problems(self, scene: "Scene") -> list[str]:
+    def problems(self, scene: SceneView) -> list[str]:
         owner = f"PenaltyContact {self.name!r}"
         out = super().problems(scene)
         out += check_penalty_parameters(owner, self.alpha, self.damping, self.thickness, self.reach,

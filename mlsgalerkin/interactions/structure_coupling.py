@@ -47,19 +47,16 @@ StructureCoupling(fluid='water', structure='gate', walls='gate_walls', wall_acce
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from mlsgalerkin.contact.penalty import DEFAULT_ALPHA, DEFAULT_DAMPING, DEFAULT_FEATURE_ANGLE
 from mlsgalerkin.contact.surface import SurfacePoints, TrianglePoints
-from mlsgalerkin.dynamics import CarriesStepEndLoad, DrivesWalls, Interaction, Solver, Surface
+from mlsgalerkin.dynamics import CarriesStepEndLoad, DrivesWalls, Interaction, SceneView, Solver, Surface
 from mlsgalerkin.fluid.bodies import FluidBody, WallBody
 from mlsgalerkin.interactions.penalty_contact import PenaltyContact
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
 
 __all__ = ["AITKEN_RANGE", "StructureCoupling", "riding_kinematics"]
 
@@ -159,7 +156,7 @@ class StructureCoupling(Interaction):
                 f"tolerance={self.tolerance!r}, relaxation={self.relaxation!r}, contact={self.contact!r})")
 
     # ------------------------------------------------------------------ validation
-    def problems(self, scene: Scene) -> list[str]:
+    def problems(self, scene: SceneView) -> list[str]:
         owner = f"StructureCoupling {self.name!r}"
         out = super().problems(scene)
         bodies = {b.name: b for b in scene.bodies}
@@ -200,7 +197,7 @@ class StructureCoupling(Interaction):
                        "give walls=")
         return out
 
-    def setup(self, scene: Scene) -> None:
+    def setup(self, scene: SceneView) -> None:
         """The riding wall particles' anchors and footprints (from the wall body), and the
         reaction records in the scene's dimension."""
         if scene.dim in (2, 3) and self.reaction.shape != (scene.dim,) and not np.any(self.reaction):

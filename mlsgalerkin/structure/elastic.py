@@ -34,7 +34,9 @@ owning element (scikit-fem sorts facet nodes) so that the normal points out of t
 
 from __future__ import annotations
 
+import inspect
 import math
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import ClassVar
@@ -42,6 +44,7 @@ from typing import ClassVar
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
+from scipy.sparse.linalg import eigsh
 from skfem import (
     Basis,
     BilinearForm,
@@ -61,11 +64,13 @@ from skfem import (
 )
 from skfem.helpers import dot
 from skfem.models.elasticity import lame_parameters, linear_elasticity
+from threadpoolctl import threadpool_limits
 
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.dynamics import Body
 
-__all__ = ["ELEMENTS", "ELEMENTS_3D", "INTEGRATORS", "MODELS", "STRUCTURE_SOLVER", "ElasticBody", "ElasticMaterial", "WetSurface"]
+__all__ = ["ARPACK_SEED", "ELEMENTS", "ELEMENTS_3D", "INTEGRATORS", "MODELS", "STRUCTURE_SOLVER", "ElasticBody",
+           "ElasticMaterial", "WetSurface", "arpack_eigenvalue"]
 
 FloatArray = NDArray[np.float64]
 Predicate = Callable[[FloatArray], FloatArray]
@@ -80,6 +85,23 @@ ELEMENTS_3D = {"Hex1": ElementHex1, "Hex2": ElementHex2, "P1": ElementTetP1}
 MODELS = ("linear", "stvenant_kirchhoff", "neo_hookean")
 #: Time integrators: explicit central differences (sub-cycled) and implicit Newmark (linear only).
 INTEGRATORS = ("explicit", "newmark")
+#: Seed of ARPACK's start vector in :func:`arpack_eigenvalue`.
+ARPACK_SEED = 0
+_EIGSH_TAKES_RNG = "rng" in inspect.signature(eigsh).parameters
+
+
+def arpack_eigenvalue(A: sp.spmatrix, **options: object) -> float:
+    """The eigenvalue of the symmetric ``A`` that scipy's ``eigsh(A, k=1, **options)`` finds, the
+    same in every process: ARPACK starts from a fixed pseudo-random vector (seed
+    :data:`ARPACK_SEED`) and draws any restart vector from the same seeded generator, on one BLAS
+    thread. Without ``v0`` scipy (≥ 1.15) draws the start from the operating system's entropy, so
+    the eigenvalue differed at round-off between runs (and, through the sub-step and the
+    high-mode damping, every number of an explicit elastic run)."""
+    rng = np.random.default_rng(ARPACK_SEED)
+    v0 = rng.uniform(-1.0, 1.0, A.shape[0])
+    seeded = {"rng": rng} if _EIGSH_TAKES_RNG else {}
+    with threadpool_limits(limits=1, user_api="blas"):
+        return float(eigsh(A, k=1, v0=v0, return_eigenvectors=False, **seeded, **options)[0])
 
 
 @dataclass(frozen=True)
@@ -101,17 +123,26 @@ class ElasticMaterial:
         if self.plane not in ("strain", "stress"):
             raise ValueError(f"ElasticMaterial: plane must be 'strain' or 'stress', got {self.plane!r}")
 
-    def lame(self) -> tuple[float, float]:
-        """``(λ, μ)`` in Pa, with the plane-stress ``λ`` when ``plane == "stress"`` (2D bodies; a 3D
-        body uses :meth:`lame3d`)."""
+    def lame(self, dim: int = 2) -> tuple[float, float]:
+        r"""``(λ, μ)`` in Pa of the material in a ``dim``-dimensional body: the one conversion from
+        Young's modulus and Poisson's ratio,
+
+        .. math:: \lambda = \frac{E\nu}{(1 + \nu)(1 - 2\nu)},\qquad \mu = \frac{E}{2(1 + \nu)}
+
+        (``skfem.models.elasticity.lame_parameters``), in 3D and in 2D plane strain; in 2D plane
+        stress ``λ`` becomes :math:`2\lambda\mu/(\lambda + 2\mu)` (``plane`` applies in 2D only)."""
+        if dim not in (2, 3):
+            raise ValueError(f"ElasticMaterial.lame: a body is 2D or 3D, got dim={dim!r}")
         lam, mu = lame_parameters(self.young, self.poisson)
-        if self.plane == "stress":
+        if dim == 2 and self.plane == "stress":
             lam = 2.0 * lam * mu / (lam + 2.0 * mu)
         return lam, mu
 
     def lame3d(self) -> tuple[float, float]:
-        """``(λ, μ)`` in Pa of the 3D material (``plane`` does not apply)."""
-        return lame_parameters(self.young, self.poisson)
+        """Deprecated: ``lame(3)``."""
+        warnings.warn("ElasticMaterial.lame3d() is deprecated; use ElasticMaterial.lame(3)", DeprecationWarning,
+                      stacklevel=2)
+        return self.lame(3)
 
     def wave_speed(self) -> float:
         """Dilatational wave speed ``sqrt((λ + 2μ)/ρ)`` (m/s) of the 2D model."""
@@ -222,7 +253,7 @@ class ElasticBody(Body):
     mesh : skfem.Mesh
         A 2D mesh (``MeshQuad`` for Q1/Q2, ``MeshTri`` for P1) or a 3D one (``MeshHex`` for
         Hex1/Hex2, ``MeshTet`` for P1), in m, at rest. In 3D the material's ``plane`` does not
-        apply: the linear and the nonlinear models use the 3D Lamé parameters (``lame3d``).
+        apply: the linear and the nonlinear models use the 3D Lamé parameters (``lame(3)``).
     material : ElasticMaterial
     element : str
     clamped : callable, optional
@@ -291,7 +322,7 @@ class ElasticBody(Body):
         if self.gravity is not None and self.gravity.shape != (d,):
             raise ValueError(f"{owner}: gravity must be a ({d},) vector (m/s²), got shape {self.gravity.shape}")
         self.basis = Basis(mesh, ElementVector(table[element]()))
-        lam, mu = material.lame() if d == 2 else material.lame3d()
+        lam, mu = material.lame(d)
         self.stiffness = asm(linear_elasticity(lam, mu), self.basis).tocsr()
         rho = material.density
 
@@ -334,8 +365,6 @@ class ElasticBody(Body):
             except Exception as exc:
                 raise ValueError(f"{owner}: a named point lies outside the mesh ({exc}); give points inside the "
                                  "body at rest") from exc
-        self.u = np.zeros(n)
-        self.v = np.zeros(n)
 
     @property
     def dim(self) -> int:
@@ -387,7 +416,7 @@ class ElasticBody(Body):
             return self.static(f)
         from mlsgalerkin.structure import hyperelastic
 
-        lam, mu = hyperelastic.lame_for_dimension(self.material, self.dim)
+        lam, mu = self.material.lame(self.dim)     # plane strain in 2D: the constructor refuses plane stress
         f = np.asarray(f, dtype=float)
         u = np.zeros(self.n_dofs)
         for k in range(1, int(increments) + 1):
@@ -405,10 +434,10 @@ class ElasticBody(Body):
         return u
 
     def displacement_at(self, points: FloatArray, u: FloatArray | None = None) -> FloatArray:
-        """Displacement ``(n, d)`` at ``points (d, n)`` (m) interpolated with the element's shape functions."""
-        u = self.u if u is None else u
+        """Displacement ``(n, d)`` at ``points (d, n)`` (m) of the displacement ``u (N,)``,
+        interpolated with the element's shape functions."""
         P = self.basis.probes(np.asarray(points, dtype=float))
-        return (P @ u).reshape(self.dim, -1).T
+        return (P @ self._displacement(u)).reshape(self.dim, -1).T
 
     def point_displacements(self, u: FloatArray) -> dict[str, FloatArray]:
         """Displacement ``(d,)`` (m) of each named point."""
@@ -418,63 +447,103 @@ class ElasticBody(Body):
         return {k: d[:, i] for i, k in enumerate(self.points)}
 
     def vertex_displacement(self, vertices: NDArray[np.int64], u: FloatArray | None = None) -> FloatArray:
-        """Displacement ``(k, d)`` (m) of the mesh vertices ``vertices`` (their nodal degrees of freedom)."""
-        u = self.u if u is None else u
-        return u[self.basis.nodal_dofs[:, vertices]].T
+        """Displacement ``(k, d)`` (m) of the mesh vertices ``vertices`` (their nodal degrees of
+        freedom) of the displacement ``u (N,)``."""
+        return self._displacement(u)[self.basis.nodal_dofs[:, vertices]].T
 
     def surface(self, facets: Predicate | None = None, u: FloatArray | None = None) -> ContactSurface:
         """The boundary facets where ``facets(x)`` is true (all if ``None``) in the configuration
-        displaced by ``u`` (default ``self.u``), as an oriented
+        displaced by ``u (N,)`` (at rest if ``None``), as an oriented
         :class:`~mlsgalerkin.contact.ContactSurface` (normals out of the body)."""
         mesh = self.mesh
         chosen = mesh.boundary_facets() if facets is None else mesh.facets_satisfying(facets, boundaries_only=True)
-        return wet_surface(self.basis, np.asarray(chosen, dtype=np.int64)).contact_surface(self.u if u is None else u)
+        return wet_surface(self.basis, np.asarray(chosen, dtype=np.int64)).contact_surface(self._displacement(u))
 
     def internal_force(self, u: FloatArray | None = None) -> FloatArray:
-        """``K u`` ``(N,)`` in N (per unit depth), zero on the clamped degrees of freedom."""
-        f = self.stiffness @ (self.u if u is None else u)
+        """``K u`` ``(N,)`` in N (per unit depth) of the displacement ``u (N,)``, zero on the clamped
+        degrees of freedom."""
+        f = self.stiffness @ self._displacement(u)
         f[self.clamped_dofs] = 0.0
         return f
 
+    def kinetic_energy(self, v: FloatArray) -> float:
+        """``½ vᵀ M v`` (J per unit depth) of the velocity ``v (N,)`` (m/s)."""
+        return 0.5 * float(np.dot(self.lumped_mass * v, v))
+
+    def strain_energy(self, u: FloatArray) -> float:
+        """``½ uᵀ K u`` (J per unit depth) of the displacement ``u (N,)`` (m), small strain."""
+        return 0.5 * float(u @ (self.stiffness @ u))
+
     def highest_frequency(self) -> float:
         """``ω_max`` (rad/s): the square root of the largest eigenvalue of ``M⁻¹K`` over the free
-        degrees of freedom (scipy ``eigsh``)."""
-        from scipy.sparse.linalg import eigsh
-
+        degrees of freedom (scipy ``eigsh`` from a fixed start vector: the same in every process)."""
         free = self.free
         s = 1.0 / np.sqrt(self.lumped_mass[free])
         A = sp.diags(s) @ self.stiffness[free][:, free] @ sp.diags(s)
-        lam = eigsh(A, k=1, which="LA", return_eigenvectors=False, tol=1e-6)[0]
-        return float(np.sqrt(lam))
+        return float(np.sqrt(arpack_eigenvalue(A, which="LA", tol=1e-6)))
 
     def lowest_frequency(self) -> float:
         """``ω₁`` (rad/s) of the clamped body: the smallest eigenvalue of ``M⁻¹K`` over the free
-        degrees of freedom (``eigsh`` in shift-invert mode)."""
-        from scipy.sparse.linalg import eigsh
-
+        degrees of freedom (``eigsh`` in shift-invert mode, from a fixed start vector)."""
         free = self.free
         K = self.stiffness[free][:, free]
         M = sp.diags(self.lumped_mass[free])
-        lam = eigsh(K, k=1, M=M, sigma=0.0, which="LM", return_eigenvectors=False)[0]
-        return float(np.sqrt(lam))
+        return float(np.sqrt(arpack_eigenvalue(K, M=M, sigma=0.0, which="LM")))
 
     def stable_time_step(self) -> float:
         """``2/ω_max`` (s), the stability limit of undamped central differences."""
         return 2.0 / self.highest_frequency()
 
+    # ------------------------------------------------------------------ deprecated live state
+    # A body is a spec: its displacement and velocity in a run belong to its stepper
+    # (state.systems["structure"].body(name)); a script keeps its own arrays and passes them.
+    _STATELESS = ("ElasticBody.{} is deprecated: a body holds no displacement or velocity. Keep them as arrays "
+                  "(n_dofs,) and pass them: displacement_at(points, u), surface(facets, u), internal_force(u), "
+                  "kinetic_energy(v), strain_energy(u), mlsgalerkin.structure.explicit.leapfrog_step(body, u, v, "
+                  "dt, f_ext); in a run read state.systems['structure'].body(name).u")
+
+    def _legacy_state(self, name: str) -> tuple[FloatArray, FloatArray]:
+        """The displacement and velocity a script keeps on the body through the deprecated
+        ``u``, ``v``, ``step`` and ``energies`` (made at first use, with a warning)."""
+        warnings.warn(self._STATELESS.format(name), DeprecationWarning, stacklevel=3)
+        if "_legacy_uv" not in self.__dict__:
+            self.__dict__["_legacy_uv"] = (np.zeros(self.n_dofs), np.zeros(self.n_dofs))
+        return self.__dict__["_legacy_uv"]
+
+    def _displacement(self, u: FloatArray | None) -> FloatArray:
+        """``u``, or without it the displacement a script set through the deprecated ``u`` (zero,
+        the body at rest, if it never did)."""
+        if u is not None:
+            return u
+        legacy = self.__dict__.get("_legacy_uv")
+        return legacy[0] if legacy is not None else np.zeros(self.n_dofs)
+
+    @property
+    def u(self) -> FloatArray:
+        """Deprecated: keep the displacement ``(N,)`` yourself and pass it."""
+        return self._legacy_state("u")[0]
+
+    @u.setter
+    def u(self, value: FloatArray) -> None:
+        self._legacy_state("u")[0][:] = value
+
+    @property
+    def v(self) -> FloatArray:
+        """Deprecated: keep the velocity ``(N,)`` yourself and pass it."""
+        return self._legacy_state("v")[1]
+
+    @v.setter
+    def v(self, value: FloatArray) -> None:
+        self._legacy_state("v")[1][:] = value
+
     def step(self, dt: float, f_ext: FloatArray | None = None) -> None:
-        """One central-difference step of ``dt`` (s) under external nodal forces ``f_ext`` (N), on
-        ``self.u`` and the half-step velocity ``self.v`` (a standalone integrator for tests and
-        scripts; a run uses :class:`~mlsgalerkin.structure.solver.StructureSolver`)."""
-        f = -self.internal_force()
-        if f_ext is not None:
-            f = f + f_ext
-        a = f / self.lumped_mass
-        a[self.clamped_dofs] = 0.0
-        self.v += dt * a
-        self.u += dt * self.v
+        """Deprecated: :func:`mlsgalerkin.structure.explicit.leapfrog_step` on arrays you keep."""
+        from mlsgalerkin.structure.explicit import leapfrog_step
+
+        u, v = self._legacy_state("step()")
+        leapfrog_step(self, u, v, dt, f_ext)
 
     def energies(self, v_full: FloatArray | None = None) -> tuple[float, float]:
-        """``(kinetic, strain)`` energy in J per unit depth: ``½ vᵀ M v`` and ``½ uᵀ K u``."""
-        v = self.v if v_full is None else v_full
-        return 0.5 * float(np.dot(self.lumped_mass * v, v)), 0.5 * float(self.u @ (self.stiffness @ self.u))
+        """Deprecated: :meth:`kinetic_energy` and :meth:`strain_energy` of arrays you keep."""
+        u, v = self._legacy_state("energies()")
+        return self.kinetic_energy(v if v_full is None else v_full), self.strain_energy(u)

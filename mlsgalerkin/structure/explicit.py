@@ -20,17 +20,23 @@ with the lumped mass :math:`M`, the stiffness :math:`K` (CSR) and Rayleigh dampi
 :func:`subcycle_linear` runs all :math:`n` sub-steps in one numba call (the CSR product inlined):
 no Python between sub-steps, which is where a per-sub-step scipy product loses its time (measured
 in ``benchmarks/bench_structure.py``). :func:`subcycle_linear_reference` is the numpy/scipy
-version for the tests.
+version for the tests. :func:`leapfrog_step` is one undamped step of the same scheme on arrays a
+script keeps itself (a run uses :class:`~mlsgalerkin.structure.steppers.CentralDifference`).
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-__all__ = ["subcycle_linear", "subcycle_linear_reference"]
+if TYPE_CHECKING:  # pragma: no cover
+    from mlsgalerkin.structure.elastic import ElasticBody
+
+__all__ = ["leapfrog_step", "subcycle_linear", "subcycle_linear_reference"]
 
 FloatArray = NDArray[np.float64]
 
@@ -79,3 +85,17 @@ def subcycle_linear_reference(K: sp.csr_matrix, inv_m: FloatArray, fixed: NDArra
         a[:] = (f0 + (k + 1.0) / n * df - K @ (u + a1 * v)) * inv_m - a0 * v
         a[fixed] = 0.0
         v += 0.5 * dt * a
+
+
+def leapfrog_step(body: ElasticBody, u: FloatArray, v: FloatArray, dt: float, f_ext: FloatArray | None = None) -> None:
+    """One undamped central-difference step of ``dt`` (s) of the linear ``body`` in place on the
+    displacement ``u (N,)`` (m) and the half-step velocity ``v (N,)`` (m/s) under external nodal
+    forces ``f_ext (N,)`` (N): ``v += dt M⁻¹(f_ext − K u)``, ``u += dt v``, the clamped degrees of
+    freedom held."""
+    f = -body.internal_force(u)
+    if f_ext is not None:
+        f = f + f_ext
+    a = f / body.lumped_mass
+    a[body.clamped_dofs] = 0.0
+    v += dt * a
+    u += dt * v

@@ -46,7 +46,7 @@ In 3D, :math:`\mathbf F` is 3 × 3 and the numba kernel writes it out: the cofac
 \tfrac12\epsilon_{ikl}\epsilon_{jmn}F_{km}F_{ln}`), :math:`J = \sum_j F_{0j}(\mathrm{cof}\,
 \mathbf F)_{0j}`, so that the neo-Hookean :math:`\mathbf P = \mu\mathbf F + (\lambda\ln J -
 \mu)\,\mathrm{cof}\,\mathbf F / J` needs no inverse; the Lamé parameters are the material's 3D ones
-(:meth:`ElasticMaterial.lame3d`, :func:`lame_for_dimension`).
+(``ElasticMaterial.lame(3)``, :func:`lame_for_dimension`).
 
 In 2D both models are plane strain (:math:`F_{33} = 1`; the 2D neo-Hookean :math:`W` is the 3D one
 with :math:`\mathrm{tr}\,\mathbf C_{3D} = \mathrm{tr}\,\mathbf C + 1`). Plane stress would need the
@@ -160,17 +160,17 @@ def plane_strain_lame(material: ElasticMaterial) -> tuple[float, float]:
             "ElasticMaterial.lame() is only valid for small strains). Build the material with plane='strain' "
             "(for a slender beam with poisson=0 the two coincide; otherwise plane strain is stiffer by "
             "1/(1 - poisson**2) in bending), or keep the small-strain ElasticBody for plane stress.")
-    return material.lame()
+    return material.lame(2)
 
 
 def lame_for_dimension(material: ElasticMaterial, dim: int) -> tuple[float, float]:
     """``(λ, μ)`` in Pa of ``material`` for the nonlinear models of a ``dim``-dimensional body:
-    :func:`plane_strain_lame` in 2D (plane stress refused), the true 3D Lamé parameters
-    :meth:`ElasticMaterial.lame3d` in 3D (``material.plane`` does not apply)."""
+    :func:`plane_strain_lame` in 2D (plane stress refused), the 3D Lamé parameters
+    ``material.lame(3)`` in 3D (``material.plane`` does not apply)."""
     if dim == 2:
         return plane_strain_lame(material)
     if dim == 3:
-        return material.lame3d()
+        return material.lame(3)
     raise ValueError(f"hyperelastic: a body is 2D or 3D, got dim={dim!r}")
 
 

@@ -30,7 +30,7 @@ The equations of motion by constraint (units: kg, kg m², N, N m, per unit depth
   inertia tensor about the centre of mass in the body's frame at rest (the world frame at
   :math:`t = 0`); in its principal frame, :math:`I_i\dot\Omega_i = (I_j - I_k)\Omega_j\Omega_k + M_i`
   (:math:`(i, j, k)` cyclic). The integrator is the symplectic splitting of Dullweber,
-  Leimkuhler & McLachlan (1997), :mod:`mlsgalerkin.structure.integrators`;
+  Leimkuhler & McLachlan (1997), :mod:`mlsgalerkin.structure.steppers.rigid_motion`;
 - ``"vertical"`` (heave only, the rigid wedge of Zhao, Faltinsen & Aarsnes 1996):
   :math:`m\dot V_y = F_y + m g_y`, no rotation, no horizontal motion;
 - ``"fixed"``: the body does not move (a wall whose load is recorded);

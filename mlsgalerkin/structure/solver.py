@@ -2,17 +2,17 @@ r""":class:`StructureSolver`: advances the elastic and rigid bodies of a scene i
 
 Per outer step (:mod:`mlsgalerkin.dynamics`):
 
-- ``begin_step(t, Δt)``: every body advances to ``t + Δt`` with the surface forces of the last
-  exchange held (:mod:`mlsgalerkin.structure.integrators`: sub-cycled central differences,
-  Newmark, or rigid-body Verlet, with the splitting of Dullweber, Leimkuhler & McLachlan 1997
-  for the rotation of a free 3D body);
+- ``begin_step(t, Δt)``: every body's stepper advances it to ``t + Δt`` with the surface forces
+  of the last exchange ramped over the step (:mod:`mlsgalerkin.structure.steppers`: sub-cycled
+  central differences, Newmark, or rigid-body Verlet, with the splitting of Dullweber,
+  Leimkuhler & McLachlan 1997 for the rotation of a free 3D body);
 - the interactions read each body's :class:`~mlsgalerkin.dynamics.Surface` at ``t + Δt``
   (positions, velocities, accelerations, segments, nodal masses) and add forces to its surface
   nodes (cleared first, then accumulated over the exchange and the after-step exchange);
 - ``end_step``: nothing more to do; those forces drive the next step.
 
-The solver takes any outer step (``stable_time_step()`` is ``scene.dt_max``, or ``inf``; a scene of
-structures alone must give ``dt_max``): an explicit elastic body sub-cycles at its own limit,
+The solver takes any outer step (``stable_time_step()`` is its scheme's ``dt_max``, or ``inf``; a
+scene of structures alone must give ``StructureScheme(dt_max=...)``): an explicit elastic body sub-cycles at its own limit,
 Newmark and rigid bodies need none. The coupling is explicit and
 staggered; its time-step limit comes from the interactions (penalty contact) and the fluid.
 
@@ -31,22 +31,21 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
 
-from mlsgalerkin.dynamics import Body, Diagnosis, Solver, Surface
+from mlsgalerkin.dynamics import Body, Diagnosis, SceneView, Solver, Surface
 from mlsgalerkin.structure.elastic import ElasticBody
-from mlsgalerkin.structure.integrators import ElasticMotion, RigidMotion
 from mlsgalerkin.structure.rigid import RigidBody
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mlsgalerkin.scene import Scene
+from mlsgalerkin.structure.scheme import StructureScheme
+from mlsgalerkin.structure.steppers import Stepper, stepper_for
 
 __all__ = ["StructureSolver", "StructureState"]
 
-Motion = ElasticMotion | RigidMotion
+#: The state of one body in a run: its stepper (:mod:`mlsgalerkin.structure.steppers`).
+Motion = Stepper
 
 
 @dataclass
@@ -62,8 +61,13 @@ class StructureState:
         return 0  # structure nodes are not counted as particles in the throughput
 
     def body(self, name: str) -> Motion:
-        """The state and integrator of body ``name``."""
+        """The stepper of body ``name``: its live state (an elastic body's ``u``, ``v``, ``a``; a
+        rigid body's ``c``, ``V``, ``theta``, ``F``, ...) and how it advances."""
         return self.motions[name]
+
+    def body_names(self) -> list[str]:
+        """The names of the bodies with a live state here, in scene order."""
+        return list(self.motions)
 
     def observables(self) -> dict[str, float]:
         row: dict[str, float] = {}
@@ -150,13 +154,14 @@ class StructureSolver(Solver):
     """Advances the :class:`ElasticBody` and :class:`RigidBody` bodies of a scene (module docstring)."""
 
     key = "structure"
+    scheme_class = StructureScheme
 
     @classmethod
-    def problems(cls, bodies: list[Body], scene: Scene) -> list[str]:
+    def problems(cls, bodies: list[Body], scheme: StructureScheme, scene: SceneView) -> list[str]:
         out = []
-        if scene.dt_max is None and all(isinstance(b, (ElasticBody, RigidBody)) for b in scene.bodies):
-            out.append("a scene of structures alone needs an outer time step: set dt_max= (s); the structure "
-                       "solver sub-cycles inside whatever step it is given")
+        if scheme.dt_max is None and all(isinstance(b, (ElasticBody, RigidBody)) for b in scene.bodies):
+            out.append("a scene of structures alone needs an outer time step: list StructureScheme(dt_max=...) (s) "
+                       "in the scene's schemes; the structure solver sub-cycles inside whatever step it is given")
         for b in bodies:
             if not isinstance(b, (ElasticBody, RigidBody)):
                 out.append(f"body {b.name!r}: the structure solver advances ElasticBody and RigidBody, not "
@@ -166,10 +171,9 @@ class StructureSolver(Solver):
                            "singular); give clamped= or use the explicit integrator")
         return out
 
-    def __init__(self, bodies: list[Body], scene: Scene) -> None:
-        self.scene = scene
-        self._state = StructureState({b.name: (ElasticMotion(b) if isinstance(b, ElasticBody) else RigidMotion(b))
-                                      for b in bodies})
+    def __init__(self, bodies: list[Body], scheme: StructureScheme, scene: SceneView) -> None:
+        self.scheme = scheme
+        self._state = StructureState({b.name: stepper_for(b) for b in bodies})
 
     @property
     def state(self) -> StructureState:
@@ -180,9 +184,9 @@ class StructureSolver(Solver):
             m.start()
 
     def stable_time_step(self) -> float:
-        """``scene.dt_max`` if given, else ``inf``: a structure takes whatever outer step the other
-        solvers and the interactions allow (it sub-cycles; Newmark and rigid bodies need none)."""
-        return math.inf if self.scene.dt_max is None else float(self.scene.dt_max)
+        """The scheme's ``dt_max`` if given, else ``inf``: a structure takes whatever outer step the
+        other solvers and the interactions allow (it sub-cycles; Newmark and rigid bodies need none)."""
+        return math.inf if self.scheme.dt_max is None else float(self.scheme.dt_max)
 
     def begin_step(self, t: float, dt: float) -> None:
         for m in self._state.motions.values():

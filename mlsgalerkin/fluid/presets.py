@@ -1,0 +1,86 @@
+r"""Ready-made fluid schemes: :func:`water`, the recommended settings for water with a free surface.
+
+A problem states what its flow is (sound speed, gravity, the speed and length that set the
+Reynolds number of the artificial viscosity) and what it changes; everything else comes from one
+place, so every problem runs the same numerics unless it says otherwise:
+
+>>> scheme = water(c0=20.0, spacing=0.01)
+>>> [type(e).__name__ for e in scheme.effects]
+['TaitPressure', 'Gravity', 'Walls', 'MonaghanViscosity', 'DensityDiffusion', 'ParticleShifting']
+>>> scheme.spacing, scheme.approximation.h_factor
+(0.01, 1.3)
+
+The defaults are the settings the impact problems (``dam_break_impact``, ``wedge_drop``, the
+structure problems) were validated with: Monaghan's pair viscosity ``α = 0.02``, density diffusion
+``δ = 0.1`` (Antuono et al. 2010), particle shifting at each particle's own speed (Skillen et al.
+2013), tension released by cavitation (the density floored at the rest density), a cubic-spline
+MLS approximation with ``h = 1.3 Δx`` (``docs/theory/stabilisation.md`` has what each does and
+costs).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+from mlsgalerkin.approximation.settings import Approximation
+from mlsgalerkin.fluid.effect import Effect
+from mlsgalerkin.fluid.eos import TaitPressure
+from mlsgalerkin.fluid.gravity import Gravity
+from mlsgalerkin.fluid.pair_viscosity import MonaghanViscosity
+from mlsgalerkin.fluid.scheme import FluidScheme
+from mlsgalerkin.fluid.stabilisation import stabilisation
+from mlsgalerkin.fluid.viscosity import NewtonianViscosity
+from mlsgalerkin.fluid.walls import Walls
+
+__all__ = ["water"]
+
+
+def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | None = (0.0, -9.81),
+          slip: str | None = "free_slip", alpha: float = 0.02, flow: tuple[float, float] | None = None,
+          residual_viscosity: bool = False, newtonian: bool = False, delta: float = 0.1, shifting: str = "local",
+          density_filter: int = 0, negative_pressure: str = "cavitate", penalty_thickness: float | None = None,
+          consistent_integration: bool = False, spacing: float | None = None, h_factor: float = 1.3,
+          approximation: Approximation | None = None, extra: Sequence[Effect] = (), **options: Any) -> FluidScheme:
+    """The recommended :class:`~mlsgalerkin.fluid.scheme.FluidScheme` for water (module docstring).
+
+    Effects, in this order: ``TaitPressure(c0, u_max, negative_pressure)``; ``Gravity(gravity)``
+    (unless ``gravity`` is ``None``); ``Walls(slip)`` (unless ``slip`` is ``None``);
+    ``NewtonianViscosity()`` if ``newtonian`` (each phase's own viscosity); ``MonaghanViscosity(alpha,
+    residual=residual_viscosity, flow=flow)`` if ``alpha > 0``; then
+    :func:`~mlsgalerkin.fluid.stabilisation.stabilisation` of ``delta``, ``shifting``,
+    ``density_filter``, ``negative_pressure``, ``penalty_thickness`` (m; the tank's penalty surface
+    as a backstop, reaching one ``spacing``) and ``consistent_integration``; then ``extra``.
+
+    Parameters
+    ----------
+    c0 : float
+        Reference sound speed (m/s): at least ten times the largest flow speed.
+    u_max : float, optional
+        The largest expected speed (m/s), for the Mach-number check.
+    gravity : (d,) floats, optional
+        Gravitational acceleration (m/s²); ``None`` for none.
+    flow : (speed, length), optional
+        The flow's speed (m/s) and length (m): the artificial viscosity's Reynolds number is
+        reported, and warned about below 100.
+    spacing : float, optional
+        The particle spacing ``Δx`` (m) the bodies are built with; checked against them.
+    h_factor : float
+        ``h/Δx`` of the default approximation (ignored when ``approximation`` is given).
+    **options
+        ``integrator``, ``mass``, ``safety``, ``dt_max`` of the scheme.
+    """
+    effects: list[Effect] = [TaitPressure(c0, u_max=u_max, negative_pressure=negative_pressure)]
+    if gravity is not None:
+        effects.append(Gravity(tuple(gravity)))
+    if slip is not None:
+        effects.append(Walls(slip))
+    if newtonian:
+        effects.append(NewtonianViscosity())
+    if alpha > 0:
+        effects.append(MonaghanViscosity(alpha, residual=residual_viscosity, flow=flow))
+    effects += stabilisation(delta=delta, shifting=shifting, density_filter=density_filter,
+                             negative_pressure=negative_pressure, penalty_thickness=penalty_thickness,
+                             spacing=spacing, consistent_integration=consistent_integration)
+    effects += list(extra)
+    approximation = approximation if approximation is not None else Approximation(h_factor=h_factor)
+    return FluidScheme(effects, approximation=approximation, spacing=spacing, **options)

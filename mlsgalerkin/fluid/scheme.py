@@ -1,0 +1,169 @@
+r"""The fluid's numerical settings: :class:`FluidScheme`, and :class:`FluidContext`, what an effect
+sees of them and of the scene.
+
+A scene lists the fluid's settings once, as a scheme beside the other solvers' schemes:
+
+>>> from mlsgalerkin.fluid import FluidScheme, Gravity, TaitPressure, Walls
+>>> scheme = FluidScheme([TaitPressure(20.0), Gravity((0.0, -9.81)), Walls()], dt_max=1e-3)
+>>> scheme.problems()
+[]
+>>> FluidScheme([TaitPressure(20.0)], safety=3.0).problems()
+['safety factor must be in (0, 1.5], got 3.0']
+
+:func:`~mlsgalerkin.fluid.presets.water` returns the recommended scheme for water with a free
+surface, so a problem lists only what it changes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, ClassVar, Sequence
+
+from mlsgalerkin.approximation.settings import Approximation
+from mlsgalerkin.dynamics import SceneView, Scheme
+from mlsgalerkin.fluid.effect import Effect
+from mlsgalerkin.fluid.integrators import make_integrator
+from mlsgalerkin.fluid.mass import MASS_OPTIONS
+from mlsgalerkin.io.files import to_jsonable
+
+__all__ = ["FluidContext", "FluidScheme", "SPACING_TOLERANCE"]
+
+#: Largest relative difference between a wall body's particle spacing and the fluid's: wall
+#: particles are nodes of the fluid's approximation and each integrates a ``spacing^d`` volume,
+#: so walls on another lattice leave the fluid's Galerkin sums wrong near the wall.
+SPACING_TOLERANCE = 1e-6
+
+
+@dataclass
+class FluidScheme(Scheme):
+    """The fluid's effects and options: everything numerical about the particle solver.
+
+    Parameters
+    ----------
+    effects : list of Effect
+        The units of physics (:mod:`mlsgalerkin.fluid`; nothing unlisted is computed); exactly
+        one pressure model.
+    approximation : Approximation
+        Kernel, ``h/Δx``, basis, method, neighbour skin.
+    integrator : str or Integrator
+        ``"kdk"`` (kick-drift-kick, default) or ``"predictor_corrector"``.
+    mass : str
+        ``"lumped"``, ``"particle"`` or ``"consistent"``.
+    safety : float
+        Factor on the stable time step, in ``(0, 1.5]``.
+    dt_max : float, optional
+        Largest time step (s).
+    spacing : float, optional
+        The particle spacing ``Δx`` (m) the fluid bodies were built with; checked against every
+        fluid and wall body (``None``: the fluid bodies' own, which must agree).
+    """
+
+    solver: ClassVar[str] = "mlsgalerkin.fluid.solver:FluidSolver"
+
+    effects: Sequence[Effect] = ()
+    approximation: Approximation = field(default_factory=Approximation)
+    integrator: Any = "kdk"
+    mass: str = "lumped"
+    safety: float = 1.0
+    dt_max: float | None = None
+    spacing: float | None = None
+
+    def __post_init__(self) -> None:
+        self.effects = list(self.effects)
+
+    def problems(self) -> list[str]:
+        """Problems with the options alone (the effects are checked with the bodies, by the solver)."""
+        out: list[str] = []
+        if self.dt_max is not None and not (isinstance(self.dt_max, (int, float)) and self.dt_max > 0):
+            out.append(f"dt_max must be positive, got {self.dt_max!r}")
+        if not (isinstance(self.safety, (int, float)) and 0 < self.safety <= 1.5):
+            out.append(f"safety factor must be in (0, 1.5], got {self.safety!r}")
+        try:
+            make_integrator(self.integrator)
+        except ValueError as err:
+            out.append(str(err))
+        if self.mass not in MASS_OPTIONS:
+            out.append(f"mass must be 'lumped', 'particle' or 'consistent', got {self.mass!r}")
+        if self.spacing is not None and not (isinstance(self.spacing, (int, float)) and self.spacing > 0):
+            out.append(f"spacing must be positive (the particle spacing, m), got {self.spacing!r}")
+        if isinstance(self.approximation, Approximation):
+            out.extend(self.approximation.problems())
+        else:
+            out.append(f"approximation must be an Approximation, got {self.approximation!r}")
+        return out
+
+    def pressure_model(self) -> Effect | None:
+        """The listed effect with role ``"pressure"`` (the first, if several are listed)."""
+        return next((e for e in self.effects if getattr(e, "role", "") == "pressure"), None)
+
+    def provides(self, quantity: str) -> bool:
+        """Whether a listed effect provides ``quantity`` (``"gravity"``, ``"free_surface"``, ...)."""
+        return any(quantity in getattr(e, "provides", ()) for e in self.effects)
+
+    def identity(self) -> dict[str, Any]:
+        """The settings that make a run this run (as a run's identity has always held them)."""
+        out = {
+            "effects": [repr(e) for e in self.effects],
+            "approximation": to_jsonable(self.approximation.__dict__),
+            "integrator": str(getattr(self.integrator, "name", self.integrator)),
+            "mass": self.mass, "safety": self.safety, "dt_max": self.dt_max,
+        }
+        return out  # the spacing is checked against the bodies, whose initial state the identity hashes
+
+
+@dataclass(frozen=True)
+class FluidContext:
+    """What an effect sees in :meth:`~mlsgalerkin.fluid.effect.Effect.check` and
+    :meth:`~mlsgalerkin.fluid.effect.Effect.setup`: the fluid's scheme and a read-only view of
+    the scene. Its attribute names are those an effect read from the scene before schemes
+    existed (``effects``, ``approximation``, ``dim``, ``safety``, ``dt_max``, ``bodies_of``),
+    so an effect written then keeps working.
+    """
+
+    scheme: FluidScheme
+    scene: SceneView
+
+    @property
+    def dim(self) -> int:
+        return self.scene.dim
+
+    @property
+    def effects(self) -> list[Effect]:
+        return list(self.scheme.effects)
+
+    @property
+    def approximation(self) -> Approximation:
+        return self.scheme.approximation
+
+    @property
+    def safety(self) -> float:
+        return self.scheme.safety
+
+    @property
+    def dt_max(self) -> float | None:
+        return self.scheme.dt_max
+
+    @property
+    def interactions(self) -> tuple:
+        return self.scene.interactions
+
+    @property
+    def probes(self) -> tuple:
+        return self.scene.probes
+
+    def bodies_of(self, kind: type) -> list:
+        """The scene's bodies that are instances of ``kind``, in scene order."""
+        return self.scene.bodies_of(kind)
+
+    def pressure_model(self) -> Effect | None:
+        """The scheme's pressure model (``None`` if none is listed)."""
+        return self.scheme.pressure_model()
+
+    def sound_speed(self) -> float | None:
+        """The pressure model's reference sound speed ``c0`` (m/s), ``None`` without one."""
+        c0 = getattr(self.pressure_model(), "c0", None)
+        return None if c0 is None else float(c0)
+
+    def provides(self, quantity: str) -> bool:
+        """Whether a listed effect provides ``quantity``."""
+        return self.scheme.provides(quantity)
