@@ -142,7 +142,7 @@ def _body_health(name: str, m: Motion, max_displacement: float | None) -> Diagno
     if size.size and size[k] > max_displacement:
         return Diagnosis(quantity="displacement", value=u[k], limit=float(max_displacement), point="node", index=k,
                          problem=f"|u| = {size[k]:.4g} m exceeds {max_displacement:.4g} m", position=rest[k],
-                             at_rest=True, **where)
+                         at_rest=True, **where)
     return None
 
 
