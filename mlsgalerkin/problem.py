@@ -246,7 +246,8 @@ def prepare_problem(problem: str | Path | ModuleType, overrides: dict[str, Any] 
     its scene within ``max_particles`` (a lattice larger than that is refused before it is
     allocated), apply ``output`` overrides (``Output`` fields: ``every``, ``checkpoint_every``,
     ``checkpoint_wall_every``, …) and validate the scene."""
-    from mlsgalerkin.fluid.bodies import FluidBody, particle_limit
+    from mlsgalerkin.limits import particle_limit
+
     mod = problem if isinstance(problem, ModuleType) else load_problem(problem)
     params = parse_overrides(mod.Parameters, overrides or {})
     problems = _finite_problems(params)
@@ -283,7 +284,7 @@ def prepare_problem(problem: str | Path | ModuleType, overrides: dict[str, Any] 
         frames = int(math.floor(scene.t_end / o.every + 1e-9)) + 1
     else:
         frames = 2
-    fluid = sum(b.n for b in scene.bodies if isinstance(b, FluidBody))
+    fluid = sum(getattr(b, "n", 0) for b in scene.bodies if getattr(b, "particle_kind", None) == "fluid")
     estimate = {"particles": n, "fluid_particles": fluid, "memory_mb": n * _BYTES_PER_PARTICLE.get(dim, 6000) / 1e6,
                 "frames": frames if o.vtu else 0,
                 "checkpoint_every_s": o.checkpoint_every if o.checkpoint_every is not None else scene.t_end / 10,
