@@ -199,11 +199,16 @@ def numerical_dissipation(result: Any, speed: float, length: float) -> dict[str,
     """The artificial viscosity a run carried and the Reynolds number it implies for a flow of
     ``speed`` (m/s) over ``length`` (m): ``{"numerical_viscosity_m2_per_s": ν,
     "numerical_reynolds_number": U L/ν}`` from the run's ``summary.json`` (``None`` without
-    Monaghan viscosity), for a problem's analysis to report beside its errors."""
+    Monaghan viscosity, and a ``"<key>_not_measured"`` reason), for a problem's analysis to report
+    beside its errors."""
     reports = ((getattr(result, "summary", None) or {}).get("fluid") or {}).get("effect_reports") or {}
     nu = (reports.get("monaghan_viscosity") or {}).get("numerical_viscosity_m2_per_s")
-    return {"numerical_viscosity_m2_per_s": nu,
-            "numerical_reynolds_number": speed * length / nu if nu else None}
+    out = {"numerical_viscosity_m2_per_s": nu,
+           "numerical_reynolds_number": speed * length / nu if nu else None}
+    if not nu:
+        why = "the scene has no Monaghan viscosity (no artificial viscosity to report)"
+        out.update({f"{key}_not_measured": why for key in ("numerical_viscosity_m2_per_s", "numerical_reynolds_number")})
+    return out
 
 
 def _finite_problems(params: Any) -> list[str]:
