@@ -30,6 +30,7 @@ import numpy as np
 from skfem import MeshQuad
 
 from mlsgalerkin.analysis.measured import not_measured
+from mlsgalerkin.analysis.signals import crossing_period, spectral_period
 from mlsgalerkin.fluid import (
     SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, Phase, StructureCoupling, TaitPressure, WallBody, Walls,
     hydrostatic_density, stabilisation, wall_box,
@@ -126,36 +127,20 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
 
 def oscillation_period(t: np.ndarray, y: np.ndarray, start: float) -> tuple[float, int]:
     """Mean period (s) of ``y`` after ``start`` from its upward crossings of its own mean, and the
-    number of periods it is measured over."""
+    number of periods it is measured over (:func:`~mlsgalerkin.analysis.signals.crossing_period`)."""
     sel = t >= start
-    if sel.sum() < 3:
-        return float("nan"), 0
-    t, y = t[sel], y[sel] - y[sel].mean()
-    k = np.flatnonzero((y[:-1] < 0) & (y[1:] >= 0))
-    tc = t[k] - y[k] * (t[k + 1] - t[k]) / (y[k + 1] - y[k])
-    return (float(np.diff(tc).mean()), int(tc.size - 1)) if tc.size >= 2 else (float("nan"), 0)
+    return crossing_period(t[sel], y[sel])
 
 
 def dominant_period(t: np.ndarray, y: np.ndarray, start: float, band: tuple[float, float] = (0.3, 1.5)) -> float:
     """The period (s) of the strongest oscillation of ``y`` after ``start`` within ``band``: the peak
     of the amplitude spectrum (Hann window, linear trend removed, zero-padded eightfold, the peak
-    refined by a parabola through its three bins)."""
+    refined by a parabola through its three bins; :func:`~mlsgalerkin.analysis.signals.spectral_period`);
+    NaN with fewer than 16 samples."""
     sel = t >= start
     if sel.sum() < 16:
         return float("nan")
-    tt = np.linspace(t[sel][0], t[sel][-1], int(sel.sum()))
-    yy = np.interp(tt, t[sel], y[sel])
-    yy = yy - np.polyval(np.polyfit(tt, yy, 1), tt)
-    n = 8 * tt.size
-    spec = np.abs(np.fft.rfft(yy * np.hanning(tt.size), n))
-    freq = np.fft.rfftfreq(n, tt[1] - tt[0])
-    inside = np.flatnonzero((freq >= 1.0 / band[1]) & (freq <= 1.0 / band[0]))
-    if inside.size < 3:
-        return float("nan")
-    k = int(inside[np.argmax(spec[inside])])
-    a, b, c = spec[k - 1], spec[k], spec[k + 1]
-    shift = 0.5 * (a - c) / (a - 2 * b + c) if (a - 2 * b + c) != 0 else 0.0
-    return float(1.0 / (freq[k] + shift * (freq[1] - freq[0])))
+    return spectral_period(t[sel], y[sel], detrend=1, hann=True, pad=8, band=band, refine=True)
 
 
 #: Whole periods of the source the tip must swing through after the first impact (from half a

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.analysis.measured import not_measured
+from mlsgalerkin.analysis.signals import crossing_period, grid_average, half_height_window, threshold_windows
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.fluid import (
     SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, Phase, StructureCoupling, TaitPressure, WallBody, Walls,
@@ -153,15 +154,9 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
 
 
 def windows(t: np.ndarray, y: np.ndarray, level: float, gap: float = 0.3) -> list[tuple[float, float]]:
-    """The time intervals where ``|y| > level``, merged across gaps shorter than ``gap`` (s)."""
-    on = np.abs(y) > level
-    out: list[list[float]] = []
-    for k in np.flatnonzero(on):
-        if out and t[k] - out[-1][1] <= gap:
-            out[-1][1] = float(t[k])
-        else:
-            out.append([float(t[k]), float(t[k])])
-    return [(a, b) for a, b in out]
+    """The time intervals where ``|y| > level``, merged across gaps shorter than ``gap`` (s)
+    (:func:`~mlsgalerkin.analysis.signals.threshold_windows`)."""
+    return threshold_windows(t, y, level, gap)
 
 
 def water_centre_x(t: np.ndarray, momentum_x: np.ndarray, mass: float, x0: float) -> np.ndarray:
@@ -173,12 +168,9 @@ def water_centre_x(t: np.ndarray, momentum_x: np.ndarray, mass: float, x0: float
 
 def averaged(t: np.ndarray, y: np.ndarray, span: float, step: float = 1.0e-3) -> tuple[np.ndarray, np.ndarray]:
     """``y`` resampled on a uniform grid of ``step`` (s) and averaged over a centred window of
-    ``span`` (s); returns ``(grid, mean)``, both of shape ``(m,)``."""
-    grid = np.arange(float(t[0]), float(t[-1]) + 0.5 * step, step)
-    k = max(1, int(round(span / step)))
-    y_grid = np.interp(grid, t, y)
-    pad = np.pad(y_grid, (k // 2, k - 1 - k // 2), mode="edge")
-    return grid, np.convolve(pad, np.ones(k) / k, mode="valid")
+    ``span`` (s); returns ``(grid, mean)``, both of shape ``(m,)``
+    (:func:`~mlsgalerkin.analysis.signals.grid_average`)."""
+    return grid_average(t, y, span, step)
 
 
 def impacts(t: np.ndarray, centre: np.ndarray, load: np.ndarray, rest_load: float) -> list[dict]:
@@ -205,12 +197,7 @@ def impacts(t: np.ndarray, centre: np.ndarray, load: np.ndarray, rest_load: floa
         item = {"centre_max_s": float(t[i]), "centre_max_m": float(centre[i])}
         if near.size:
             j = int(near[np.argmax(load[near])])
-            half = rest_load + 0.5 * (load[j] - rest_load)
-            a, b = j, j
-            while a > 0 and load[a - 1] > half:
-                a -= 1
-            while b < load.size - 1 and load[b + 1] > half:
-                b += 1
+            a, b = half_height_window(load, j, rest_load)
             item.update(load_peak_s=float(t[j]), load_peak_N_per_m=float(load[j]),
                         window_s=[round(float(t[a]), 3), round(float(t[b]), 3)])
         out.append(item)
@@ -295,12 +282,9 @@ def analyse(result, p: Parameters) -> dict:
         not_measured(out, "late_period_s", f"the run ended at t = {t[-1]:.3g} s; the period is read after {LATE_FROM:g} s",
                      run_to=LATE_FROM + 0.5)
     elif late.sum() > 10 and p.support == "spring":
-        y = theta[late] - theta[late].mean()
-        tl = t[late]
-        k = np.flatnonzero((y[:-1] < 0) & (y[1:] >= 0))
-        tc = tl[k] - y[k] * (tl[k + 1] - tl[k]) / (y[k + 1] - y[k])
-        out["late_period_s"] = float(np.diff(tc).mean()) if tc.size >= 2 else None
-        out["late_periods_measured"] = int(max(tc.size - 1, 0))
+        period, periods = crossing_period(t[late], theta[late])
+        out["late_period_s"] = period if periods else None
+        out["late_periods_measured"] = periods
         if out["late_period_s"] is None:
             not_measured(out, "late_period_s", f"fewer than two upward crossings of the mean angle after {LATE_FROM:g} s",
                          run_to=t[-1] + 2 * out["dry_period_s"])

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.analysis.measured import not_measured
+from mlsgalerkin.analysis.signals import running_mean, spectral_period
 from mlsgalerkin.data import reference_columns
 from mlsgalerkin.fluid import (
     SHIFTING_MODES, FluidBody, Gravity, MonaghanViscosity, Phase, TaitPressure, Walls, hydrostatic_density,
@@ -132,28 +133,15 @@ def load_reference() -> dict[str, np.ndarray]:
     return out
 
 
-def running_mean(T: np.ndarray, y: np.ndarray, window: float) -> np.ndarray:
-    """Mean of ``y`` over ``[T − window/2, T + window/2]`` at each sample (uneven spacing)."""
-    c = np.concatenate([[0.0], np.cumsum(y)])
-    lo = np.searchsorted(T, T - 0.5 * window, side="left")
-    hi = np.searchsorted(T, T + 0.5 * window, side="right")
-    return (c[hi] - c[lo]) / np.maximum(hi - lo, 1)
-
-
 def ringing_period(T: np.ndarray, y: np.ndarray, start: float, stop: float) -> float:
     """Period (in ``T``) of the strongest oscillation of ``y`` over ``[start, stop]``: the peak of
-    the amplitude spectrum of the series resampled evenly, with its quadratic trend removed;
-    NaN when the window holds fewer than 64 samples."""
+    the amplitude spectrum of the series resampled evenly on 1024 points, with its quadratic trend
+    removed (:func:`~mlsgalerkin.analysis.signals.spectral_period`); NaN when the window holds
+    fewer than 64 samples."""
     sel = (T >= start) & (T <= stop)
     if sel.sum() < 64:
         return math.nan
-    tt = np.linspace(T[sel][0], T[sel][-1], 1024)
-    yy = np.interp(tt, T, y)
-    yy = yy - np.polyval(np.polyfit(tt, yy, 2), tt)
-    amp = np.abs(np.fft.rfft(yy))
-    freq = np.fft.rfftfreq(tt.size, tt[1] - tt[0])
-    k = 1 + int(np.argmax(amp[1:]))
-    return float(1.0 / freq[k])
+    return spectral_period(T[sel], y[sel], samples=1024, detrend=2, hann=False)
 
 
 #: The interval (in ``T``) the P1 peak is searched in; the ringing period is measured over

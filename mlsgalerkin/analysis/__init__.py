@@ -11,6 +11,15 @@ from mlsgalerkin.analysis.convergence import (
     observed_orders,
 )
 from mlsgalerkin.analysis.measured import not_measured, unexplained_values
+from mlsgalerkin.analysis.signals import (
+    crossing_period,
+    grid_average,
+    half_height_window,
+    running_mean,
+    spectral_period,
+    threshold_windows,
+    upward_crossings,
+)
 from mlsgalerkin.analysis.norms import (
     ErrorNorms,
     Quadrature,
@@ -35,4 +44,11 @@ __all__ = [
     "rectangle_quadrature",
     "not_measured",
     "unexplained_values",
+    "crossing_period",
+    "grid_average",
+    "half_height_window",
+    "running_mean",
+    "spectral_period",
+    "threshold_windows",
+    "upward_crossings",
 ]
