@@ -187,7 +187,7 @@ def _describe(problem: str) -> str:
 def build_page(meta: dict) -> str:
     """The Markdown of ``docs/gallery.md`` from the records of ``gallery.json`` (one section per
     record, in the order of :data:`ENTRIES`)."""
-    from mlsgalerkin.io.render_fields import FIELDS
+    from mlsgalerkin.plots.fields import FIELDS
 
     order = {e.problem: k for k, e in enumerate(ENTRIES)}
     records = sorted(meta["entries"].values(), key=lambda r: order.get(r["problem"], len(order)))

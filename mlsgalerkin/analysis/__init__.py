@@ -11,6 +11,14 @@ from mlsgalerkin.analysis.convergence import (
     observed_orders,
 )
 from mlsgalerkin.analysis.measured import not_measured, unexplained_values
+from mlsgalerkin.analysis.norms import (
+    ErrorNorms,
+    Quadrature,
+    energy_error,
+    h1_seminorm_error,
+    l2_error,
+    rectangle_quadrature,
+)
 from mlsgalerkin.analysis.signals import (
     crossing_period,
     grid_average,
@@ -19,14 +27,6 @@ from mlsgalerkin.analysis.signals import (
     spectral_period,
     threshold_windows,
     upward_crossings,
-)
-from mlsgalerkin.analysis.norms import (
-    ErrorNorms,
-    Quadrature,
-    energy_error,
-    h1_seminorm_error,
-    l2_error,
-    rectangle_quadrature,
 )
 
 __all__ = [
