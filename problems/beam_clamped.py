@@ -165,15 +165,15 @@ def analyse(result, p: Parameters) -> dict:
     out.update(numerical_dissipation(result, 2.0 * math.sqrt(p.g * p.column_height), p.column_height))
     largest = 1e3 * max(abs(out["tip_x_max_m"]), abs(out["tip_x_min_m"]))
     keys = ("first_load_s", "crossing_period_s", "period_s", "period_error_vs_source", "period_error_vs_dry_model")
-    moved = np.abs(tip).max() > 0
-    hit = float(t[np.argmax(np.abs(tip) > 0.05 * np.abs(tip).max())]) if moved else math.nan
     # the surge front runs at about 2 sqrt(g H) (Ritter): the earliest the water can reach the beam
-    arrival = hit if moved else (p.beam_x - p.column_width) / (2.0 * math.sqrt(p.g * p.column_height))
-    start = arrival + 0.5 * SOURCE_PERIOD
+    earliest = (p.beam_x - p.column_width) / (2.0 * math.sqrt(p.g * p.column_height))
+    moved = np.abs(tip).max() > 0 and t[-1] >= earliest
+    hit = float(t[np.argmax(np.abs(tip) > 0.05 * np.abs(tip).max())]) if moved else math.nan
+    start = (hit if moved else earliest) + 0.5 * SOURCE_PERIOD
     needed = start + PERIODS_NEEDED * SOURCE_PERIOD
     if t[-1] < needed:
         why = (f"the run ended at t = {t[-1]:.3g} s, before {PERIODS_NEEDED} periods of the tip after the first "
-               + (f"load at {hit:.3f} s" if moved else "load (the tip has not moved)"))
+               + (f"load at {hit:.3f} s" if moved else f"load (the surge reaches the beam at about {earliest:.2f} s)"))
         text = not_measured(out, keys, why, run_to=needed)
         out["periods_measured"] = 0
         out["headline"] = f"tip period {text}; largest tip deflection up to t = {t[-1]:.3g} s: {largest:.2f} mm"
