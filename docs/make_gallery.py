@@ -10,7 +10,7 @@ Usage (from the repository's root)::
 
 Each problem runs at a small size up to its interesting moment (the dam break's surge, the
 gravity current's head, the drop's crown, the waves in the tank) in a temporary directory,
-and its last frame is drawn with :func:`mlsgalerkin.io.render_frame` — the picture
+and its last frame is drawn with :func:`mlsgalerkin.plots.render_frame` — the picture
 ``mlsgalerkin render RUN_DIR --color-by FIELD`` writes as ``final.png`` (the page gives both
 commands). What was run (parameters, particles, steps, wall time, the problem's headline
 result, commit and date) is kept in ``docs/gallery/gallery.json``; the page is built from that
@@ -157,7 +157,7 @@ def draw_entry(entry: Entry, run_dir: Path, images: Path = IMAGES) -> dict:
     """Draw the last frame of the run in ``run_dir`` to ``images/PROBLEM.png``; returns the record
     kept in ``gallery.json`` (with the particles, steps, wall time and headline of the run's
     ``summary.json``)."""
-    from mlsgalerkin.io import render_frame
+    from mlsgalerkin.plots import render_frame
 
     t0 = time.perf_counter()
     png = images / f"{entry.problem}.png"
@@ -187,7 +187,7 @@ def _describe(problem: str) -> str:
 def build_page(meta: dict) -> str:
     """The Markdown of ``docs/gallery.md`` from the records of ``gallery.json`` (one section per
     record, in the order of :data:`ENTRIES`)."""
-    from mlsgalerkin.io.render_fields import FIELDS
+    from mlsgalerkin.plots.fields import FIELDS
 
     order = {e.problem: k for k, e in enumerate(ENTRIES)}
     records = sorted(meta["entries"].values(), key=lambda r: order.get(r["problem"], len(order)))

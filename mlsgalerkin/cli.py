@@ -213,7 +213,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
-    from mlsgalerkin.io.render_run import RenderError, inspect_run, render_run
+    from mlsgalerkin.plots.run import RenderError, inspect_run, render_run
 
     if args.snapshots < 0:
         print(f"error: --snapshots must be 0 or more, got {args.snapshots}", file=sys.stderr)

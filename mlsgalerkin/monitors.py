@@ -126,7 +126,7 @@ class Output:
             out.append(f"output.times must be non-negative times (s), got {self.times!r}")
         if not (isinstance(self.keep_checkpoints, int) and self.keep_checkpoints >= 1):
             out.append(f"output.keep_checkpoints must be an integer >= 1, got {self.keep_checkpoints!r}")
-        from mlsgalerkin.io.render_fields import field_name_problem
+        from mlsgalerkin.plots.fields import field_name_problem
 
         color_problem = field_name_problem(self.color_by)
         if color_problem:
@@ -518,7 +518,7 @@ class ProgressBar(Monitor):
 class Pictures(Monitor):
     """``animation.gif`` and/or ``final.png`` of the fluid frames coloured by ``color_by``
     (rendered at the end of a completed or paused run by
-    :func:`~mlsgalerkin.io.render_run.render_run`: axes in metres, the field's unit, the time,
+    :func:`~mlsgalerkin.plots.run.render_run`: axes in metres, the field's unit, the time,
     walls in grey; a rendering failure is logged, never fatal: the frames and tables are
     written). ``color_by`` is checked against the field table with the scene (``Output.problems``)
     and against the fluid's frame before the first step: a field the scene does not write
@@ -531,7 +531,7 @@ class Pictures(Monitor):
         self.gif, self.png, self.color_by = gif, png, color_by
 
     def problems(self) -> list[str]:
-        from mlsgalerkin.io.render_fields import field_name_problem
+        from mlsgalerkin.plots.fields import field_name_problem
 
         msg = field_name_problem(self.color_by)
         return [f"Pictures(color_by={self.color_by!r}): {msg}"] if msg else []
@@ -540,7 +540,7 @@ class Pictures(Monitor):
         self._info = info
         if info.out is None or not (self.gif or self.png):
             return
-        from mlsgalerkin.io.render_fields import resolve_field
+        from mlsgalerkin.plots.fields import resolve_field
 
         self._skip = None
         for key, system in state.systems.items():
@@ -567,7 +567,7 @@ class Pictures(Monitor):
 
     def render(self, directory: Path, title: str, dim: int) -> None:
         """Draw ``animation.gif``/``final.png`` of ``directory/particles.pvd`` (if it exists)."""
-        from mlsgalerkin.io.render_run import render_run
+        from mlsgalerkin.plots.run import render_run
 
         if not (directory / "particles.pvd").is_file():
             return

@@ -204,11 +204,16 @@ def numerical_dissipation(result: Any, speed: float, length: float) -> dict[str,
     """The artificial viscosity a run carried and the Reynolds number it implies for a flow of
     ``speed`` (m/s) over ``length`` (m): ``{"numerical_viscosity_m2_per_s": ν,
     "numerical_reynolds_number": U L/ν}`` from the run's ``summary.json`` (``None`` without
-    Monaghan viscosity), for a problem's analysis to report beside its errors."""
+    Monaghan viscosity, and a ``"<key>_not_measured"`` reason), for a problem's analysis to report
+    beside its errors."""
     reports = ((getattr(result, "summary", None) or {}).get("fluid") or {}).get("effect_reports") or {}
     nu = (reports.get("monaghan_viscosity") or {}).get("numerical_viscosity_m2_per_s")
-    return {"numerical_viscosity_m2_per_s": nu,
-            "numerical_reynolds_number": speed * length / nu if nu else None}
+    out = {"numerical_viscosity_m2_per_s": nu,
+           "numerical_reynolds_number": speed * length / nu if nu else None}
+    if not nu:
+        why = "the scene has no Monaghan viscosity (no artificial viscosity to report)"
+        out.update({f"{key}_not_measured": why for key in ("numerical_viscosity_m2_per_s", "numerical_reynolds_number")})
+    return out
 
 
 def _finite_problems(params: Any) -> list[str]:
@@ -257,8 +262,8 @@ def prepare_problem(problem: str | Path | ModuleType, overrides: dict[str, Any] 
     problem's ``check`` before it is built, and by ``ElasticBody`` before it is assembled), apply
     ``output`` overrides (``Output`` fields: ``every``, ``checkpoint_every``,
     ``checkpoint_wall_every``, …) and validate the scene."""
-    from mlsgalerkin.fluid.bodies import FluidBody, particle_limit
-    from mlsgalerkin.structure.checks import BYTES_PER_ELEMENT, element_limit, substep_estimate
+    from mlsgalerkin.limits import element_limit, particle_limit
+
     mod = problem if isinstance(problem, ModuleType) else load_problem(problem)
     params = parse_overrides(mod.Parameters, overrides or {})
     problems = _finite_problems(params)
@@ -296,13 +301,15 @@ def prepare_problem(problem: str | Path | ModuleType, overrides: dict[str, Any] 
         frames = int(math.floor(scene.t_end / o.every + 1e-9)) + 1
     else:
         frames = 2
-    fluid = sum(b.n for b in scene.bodies if isinstance(b, FluidBody))
-    meshes = [(b.mesh.t.shape[1], b.element) for b in scene.bodies if hasattr(b, "mesh") and hasattr(b, "element")]
-    memory = n * _BYTES_PER_PARTICLE.get(dim, 6000) + sum(k * BYTES_PER_ELEMENT.get(e, 16_000) for k, e in meshes)
+    fluid = sum(getattr(b, "n", 0) for b in scene.bodies if getattr(b, "particle_kind", None) == "fluid")
+    # bodies with a mesh report their own size and, when explicit, their sub-step (duck-typed: the
+    # run layer imports no body package)
+    memory = n * _BYTES_PER_PARTICLE.get(dim, 6000) + sum(b.memory_estimate() for b in scene.bodies
+                                                           if hasattr(b, "memory_estimate"))
+    substeps = [scene.t_end / s for b in scene.bodies if hasattr(b, "substep_estimate") and (s := b.substep_estimate())]
     estimate = {"particles": n, "fluid_particles": fluid, "memory_mb": memory / 1e6,
-                "structure_elements": sum(k for k, _ in meshes),
-                "structure_substeps": max([scene.t_end / s for s in map(substep_estimate, scene.bodies) if s],
-                                          default=0),
+                "structure_elements": sum(b.n_elements for b in scene.bodies if hasattr(b, "n_elements")),
+                "structure_substeps": max(substeps, default=0),
                 "frames": frames if o.vtu else 0,
                 "checkpoint_every_s": o.checkpoint_every if o.checkpoint_every is not None else scene.t_end / 10,
                 "checkpoint_wall_every_s": o.checkpoint_wall_every}

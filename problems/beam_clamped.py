@@ -29,6 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 from skfem import MeshQuad
 
+from mlsgalerkin.analysis.measured import not_measured
+from mlsgalerkin.analysis.signals import crossing_period, spectral_period
 from mlsgalerkin.fluid import (
     SHIFTING_MODES,
     FluidBody,
@@ -134,59 +136,71 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
 
 def oscillation_period(t: np.ndarray, y: np.ndarray, start: float) -> tuple[float, int]:
     """Mean period (s) of ``y`` after ``start`` from its upward crossings of its own mean, and the
-    number of periods it is measured over."""
+    number of periods it is measured over (:func:`~mlsgalerkin.analysis.signals.crossing_period`)."""
     sel = t >= start
-    if sel.sum() < 3:
-        return float("nan"), 0
-    t, y = t[sel], y[sel] - y[sel].mean()
-    k = np.flatnonzero((y[:-1] < 0) & (y[1:] >= 0))
-    tc = t[k] - y[k] * (t[k + 1] - t[k]) / (y[k + 1] - y[k])
-    return (float(np.diff(tc).mean()), int(tc.size - 1)) if tc.size >= 2 else (float("nan"), 0)
+    return crossing_period(t[sel], y[sel])
 
 
 def dominant_period(t: np.ndarray, y: np.ndarray, start: float, band: tuple[float, float] = (0.3, 1.5)) -> float:
     """The period (s) of the strongest oscillation of ``y`` after ``start`` within ``band``: the peak
     of the amplitude spectrum (Hann window, linear trend removed, zero-padded eightfold, the peak
-    refined by a parabola through its three bins)."""
+    refined by a parabola through its three bins; :func:`~mlsgalerkin.analysis.signals.spectral_period`);
+    NaN with fewer than 16 samples."""
     sel = t >= start
     if sel.sum() < 16:
         return float("nan")
-    tt = np.linspace(t[sel][0], t[sel][-1], int(sel.sum()))
-    yy = np.interp(tt, t[sel], y[sel])
-    yy = yy - np.polyval(np.polyfit(tt, yy, 1), tt)
-    n = 8 * tt.size
-    spec = np.abs(np.fft.rfft(yy * np.hanning(tt.size), n))
-    freq = np.fft.rfftfreq(n, tt[1] - tt[0])
-    inside = np.flatnonzero((freq >= 1.0 / band[1]) & (freq <= 1.0 / band[0]))
-    if inside.size < 3:
-        return float("nan")
-    k = int(inside[np.argmax(spec[inside])])
-    a, b, c = spec[k - 1], spec[k], spec[k + 1]
-    shift = 0.5 * (a - c) / (a - 2 * b + c) if (a - 2 * b + c) != 0 else 0.0
-    return float(1.0 / (freq[k] + shift * (freq[1] - freq[0])))
+    return spectral_period(t[sel], y[sel], detrend=1, hann=True, pad=8, band=band, refine=True)
+
+
+#: Whole periods of the source the tip must swing through after the first impact (from half a
+#: period after it) before its period is measured.
+PERIODS_NEEDED = 2
 
 
 def analyse(result, p: Parameters) -> dict:
+    """The tip's period after the first impact (spectral peak and upward crossings) against the
+    source and the 2D beam's dry period, measured only when the run covered ``PERIODS_NEEDED``
+    periods after the first impact."""
     ts = result.timeseries
     t = np.asarray(ts["time"])
     tip = np.asarray(ts["tip_x"])
     beam = _beam(p)
     dry = 2.0 * math.pi / beam.lowest_frequency()
-    hit = t[np.argmax(np.abs(tip) > 0.05 * np.abs(tip).max())] if np.abs(tip).max() > 0 else float("nan")
-    period, cycles = oscillation_period(t, tip, hit + 0.5 * SOURCE_PERIOD) if math.isfinite(hit) else (float("nan"), 0)
-    spectral = dominant_period(t, tip, hit + 0.5 * SOURCE_PERIOD) if math.isfinite(hit) else float("nan")
     out = {
-        "tip_x_max_m": float(tip.max()), "tip_x_min_m": float(tip.min()), "first_load_s": float(hit),
-        "crossing_period_s": period, "periods_measured": cycles, "period_s": spectral,
+        "tip_x_max_m": float(tip.max()), "tip_x_min_m": float(tip.min()),
         "source_period_s": SOURCE_PERIOD, "euler_bernoulli_period_s": euler_bernoulli_period(p),
         "dry_period_2d_model_s": dry,
-        "period_error_vs_source": spectral / SOURCE_PERIOD - 1.0 if math.isfinite(spectral) else None,
-        "period_error_vs_dry_model": spectral / dry - 1.0 if math.isfinite(spectral) else None,
     }
-    period = spectral
     out.update(numerical_dissipation(result, 2.0 * math.sqrt(p.g * p.column_height), p.column_height))
-    out["headline"] = (f"tip period {period:.4f} s (spectral peak; {cycles} upward crossings) vs 0.5971 s dry (source; the 2D beam's own "
-                       f"{dry:.4f} s), largest tip deflection {1e3 * max(abs(out['tip_x_max_m']), abs(out['tip_x_min_m'])):.2f} mm")
+    largest = 1e3 * max(abs(out["tip_x_max_m"]), abs(out["tip_x_min_m"]))
+    keys = ("first_load_s", "crossing_period_s", "period_s", "period_error_vs_source", "period_error_vs_dry_model")
+    # the surge front runs at about 2 sqrt(g H) (Ritter): the earliest the water can reach the beam
+    earliest = (p.beam_x - p.column_width) / (2.0 * math.sqrt(p.g * p.column_height))
+    moved = np.abs(tip).max() > 0 and t[-1] >= earliest
+    hit = float(t[np.argmax(np.abs(tip) > 0.05 * np.abs(tip).max())]) if moved else math.nan
+    start = (hit if moved else earliest) + 0.5 * SOURCE_PERIOD
+    needed = start + PERIODS_NEEDED * SOURCE_PERIOD
+    if t[-1] < needed:
+        why = (f"the run ended at t = {t[-1]:.3g} s, before {PERIODS_NEEDED} periods of the tip after the first "
+               + (f"load at {hit:.3f} s" if moved else f"load (the surge reaches the beam at about {earliest:.2f} s)"))
+        text = not_measured(out, keys, why, run_to=needed)
+        out["periods_measured"] = 0
+        out["headline"] = f"tip period {text}; largest tip deflection up to t = {t[-1]:.3g} s: {largest:.2f} mm"
+        return out
+    period, cycles = oscillation_period(t, tip, start)
+    spectral = dominant_period(t, tip, start)
+    out.update({"first_load_s": hit, "crossing_period_s": period, "periods_measured": cycles, "period_s": spectral})
+    if not math.isfinite(period):
+        not_measured(out, "crossing_period_s", "fewer than two upward crossings of the mean after the first load")
+    if not math.isfinite(spectral):
+        text = not_measured(out, ("period_s", "period_error_vs_source", "period_error_vs_dry_model"),
+                            "no spectral peak within 0.3-1.5 s after the first load")
+        out["headline"] = f"tip period {text}; largest tip deflection {largest:.2f} mm"
+        return out
+    out["period_error_vs_source"] = spectral / SOURCE_PERIOD - 1.0
+    out["period_error_vs_dry_model"] = spectral / dry - 1.0
+    out["headline"] = (f"tip period {spectral:.4f} s (spectral peak; {cycles} upward crossings) vs 0.5971 s dry (source; the 2D beam's own "
+                       f"{dry:.4f} s), largest tip deflection {largest:.2f} mm")
     return out
 
 

@@ -34,6 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mlsgalerkin.analysis.measured import not_measured
+from mlsgalerkin.analysis.signals import crossing_period, grid_average, half_height_window, threshold_windows
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.fluid import (
     SHIFTING_MODES,
@@ -161,15 +163,9 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
 
 
 def windows(t: np.ndarray, y: np.ndarray, level: float, gap: float = 0.3) -> list[tuple[float, float]]:
-    """The time intervals where ``|y| > level``, merged across gaps shorter than ``gap`` (s)."""
-    on = np.abs(y) > level
-    out: list[list[float]] = []
-    for k in np.flatnonzero(on):
-        if out and t[k] - out[-1][1] <= gap:
-            out[-1][1] = float(t[k])
-        else:
-            out.append([float(t[k]), float(t[k])])
-    return [(a, b) for a, b in out]
+    """The time intervals where ``|y| > level``, merged across gaps shorter than ``gap`` (s)
+    (:func:`~mlsgalerkin.analysis.signals.threshold_windows`)."""
+    return threshold_windows(t, y, level, gap)
 
 
 def water_centre_x(t: np.ndarray, momentum_x: np.ndarray, mass: float, x0: float) -> np.ndarray:
@@ -181,12 +177,9 @@ def water_centre_x(t: np.ndarray, momentum_x: np.ndarray, mass: float, x0: float
 
 def averaged(t: np.ndarray, y: np.ndarray, span: float, step: float = 1.0e-3) -> tuple[np.ndarray, np.ndarray]:
     """``y`` resampled on a uniform grid of ``step`` (s) and averaged over a centred window of
-    ``span`` (s); returns ``(grid, mean)``, both of shape ``(m,)``."""
-    grid = np.arange(float(t[0]), float(t[-1]) + 0.5 * step, step)
-    k = max(1, int(round(span / step)))
-    y_grid = np.interp(grid, t, y)
-    pad = np.pad(y_grid, (k // 2, k - 1 - k // 2), mode="edge")
-    return grid, np.convolve(pad, np.ones(k) / k, mode="valid")
+    ``span`` (s); returns ``(grid, mean)``, both of shape ``(m,)``
+    (:func:`~mlsgalerkin.analysis.signals.grid_average`)."""
+    return grid_average(t, y, span, step)
 
 
 def impacts(t: np.ndarray, centre: np.ndarray, load: np.ndarray, rest_load: float) -> list[dict]:
@@ -213,12 +206,7 @@ def impacts(t: np.ndarray, centre: np.ndarray, load: np.ndarray, rest_load: floa
         item = {"centre_max_s": float(t[i]), "centre_max_m": float(centre[i])}
         if near.size:
             j = int(near[np.argmax(load[near])])
-            half = rest_load + 0.5 * (load[j] - rest_load)
-            a, b = j, j
-            while a > 0 and load[a - 1] > half:
-                a -= 1
-            while b < load.size - 1 and load[b + 1] > half:
-                b += 1
+            a, b = half_height_window(load, j, rest_load)
             item.update(load_peak_s=float(t[j]), load_peak_N_per_m=float(load[j]),
                         window_s=[round(float(t[a]), 3), round(float(t[b]), 3)])
         out.append(item)
@@ -249,7 +237,17 @@ def outside(time: float, window: tuple[float, float]) -> float:
     return min(0.0, time - window[0]) + max(0.0, time - window[1])
 
 
+#: The beam's period in water is read after this time (s), once the second impact has passed.
+LATE_FROM = 6.0
+#: How long after the end of a source impact window the run must go on for that impact to be
+#: looked for (s): the load peak is searched within 1 s of each centre-of-mass maximum.
+IMPACT_MARGIN = 0.5
+
+
 def analyse(result, p: Parameters) -> dict:
+    """The impacts (module docstring), threshold windows, largest turn and pressure, and the
+    period after ``LATE_FROM``; an impact is looked for only when the run covered the source's
+    window for it, the late period only when the run went past ``LATE_FROM``."""
     ts = result.timeseries
     t = np.asarray(ts["time"])
     theta = np.asarray(ts["angle"])
@@ -259,25 +257,46 @@ def analyse(result, p: Parameters) -> dict:
                  "angle_min_rad": float(theta.min()),
                  "angle_max_rad": float(theta.max()), "pressure_P4_max_Pa": float(p4.max()),
                  "time_of_pressure_P4_max_s": float(t[int(np.argmax(p4))])}
+    if p.support != "spring":
+        out["dry_period_s_not_measured"] = "the beam is held fixed (support = fixed): no spring, no period"
+    largest_turn = (f"{math.degrees(max(out['angle_min_rad'], out['angle_max_rad'], key=abs)):.2f}°; P4 max "
+                    f"{out['pressure_P4_max_Pa']:.0f} Pa")
+    out.update(numerical_dissipation(result, 2.0 * math.sqrt(p.g * p.height), p.height))
+    sig = impact_signals(ts, p)
+    grid, load, lean, p4_mean = sig["grid"], sig["load"], sig["lean"], sig["p4"]
+    rest_load = load_at_rest(p)
+    found = impacts(grid, np.interp(grid, t, sig["centre"]), load, rest_load)
+    covered = [t[-1] + 1e-6 >= window[1] + IMPACT_MARGIN for window in SOURCE_IMPACTS]
+    if not covered[0] and not found:
+        text = not_measured(
+            out, ("impact_windows_s", "pressure_P4_windows_s", "turn_windows", "P4_windows", "impact_times",
+                  "load_peaks", "load_windows"),
+            f"the run ended at t = {t[-1]:.3g} s, before the source's first impact window "
+            f"({SOURCE_IMPACTS[0][0]:g}-{SOURCE_IMPACTS[0][1]:g} s) had passed", run_to=SOURCE_IMPACTS[0][1] + IMPACT_MARGIN)
+        out["impacts"] = []
+        out["rest_load_N_per_m"] = rest_load
+        if p.support == "spring":
+            not_measured(out, "late_period_s", f"the period is read after {LATE_FROM:g} s",
+                         run_to=LATE_FROM + 0.5)
+        out["headline"] = f"impacts {text}; largest turn up to t = {t[-1]:.3g} s: {largest_turn}"
+        return out
     big = IMPACT_SHARE * float(np.abs(theta).max()) if theta.size else 0.0
     out["impact_windows_s"] = [[round(a, 3), round(b, 3)] for a, b in windows(t, theta, big, gap=0.5)] if big > 0 else []
     loud = windows(t, p4, PRESSURE_IMPACT, gap=0.5)
     out["pressure_P4_windows_s"] = [[round(a, 3), round(b, 3)] for a, b in loud]
     out["turn_windows"] = "; ".join(f"{a:.2f}-{b:.2f} s" for a, b in out["impact_windows_s"])
     out["P4_windows"] = "; ".join(f"{a:.2f}-{b:.2f} s" for a, b in out["pressure_P4_windows_s"])
-    late = t >= min(6.0, 0.85 * t[-1])
-    if late.sum() > 10 and p.support == "spring":
-        y = theta[late] - theta[late].mean()
-        tl = t[late]
-        k = np.flatnonzero((y[:-1] < 0) & (y[1:] >= 0))
-        tc = tl[k] - y[k] * (tl[k + 1] - tl[k]) / (y[k + 1] - y[k])
-        out["late_period_s"] = float(np.diff(tc).mean()) if tc.size >= 2 else None
-        out["late_periods_measured"] = int(max(tc.size - 1, 0))
-    out.update(numerical_dissipation(result, 2.0 * math.sqrt(p.g * p.height), p.height))
-    sig = impact_signals(ts, p)
-    grid, load, lean, p4_mean = sig["grid"], sig["load"], sig["lean"], sig["p4"]
-    rest_load = load_at_rest(p)
-    found = impacts(grid, np.interp(grid, t, sig["centre"]), load, rest_load)
+    late = t >= min(LATE_FROM, 0.85 * t[-1])
+    if p.support == "spring" and t[-1] + 1e-6 < LATE_FROM:
+        not_measured(out, "late_period_s", f"the run ended at t = {t[-1]:.3g} s; the period is read after {LATE_FROM:g} s",
+                     run_to=LATE_FROM + 0.5)
+    elif late.sum() > 10 and p.support == "spring":
+        period, periods = crossing_period(t[late], theta[late])
+        out["late_period_s"] = period if periods else None
+        out["late_periods_measured"] = periods
+        if out["late_period_s"] is None:
+            not_measured(out, "late_period_s", f"fewer than two upward crossings of the mean angle after {LATE_FROM:g} s",
+                         run_to=t[-1] + 2 * out["dry_period_s"])
     for item in found:
         if "window_s" in item:
             a, b = np.searchsorted(grid, item["window_s"])
@@ -299,13 +318,19 @@ def analyse(result, p: Parameters) -> dict:
             out[f"impact{k}_centre_offset_s"] = outside(found[k - 1]["centre_max_s"], window)
             if "load_peak_s" in found[k - 1]:
                 out[f"impact{k}_load_peak_offset_s"] = outside(found[k - 1]["load_peak_s"], window)
-    out["headline"] = (f"impacts (water piled on the beam) at {out['impact_times'] or 'none'}, load peaks "
-                       f"{out['load_peaks'] or 'none'} (source: 0.75-2 and 5.1-5.9 s); threshold windows: turn "
+    at = f"at {out['impact_times']}" if out["impact_times"] else f"not found by t = {t[-1]:.2f} s"
+    out["headline"] = (f"impacts (water piled on the beam) {at}, load peaks "
+                       f"{out['load_peaks'] or 'not found'} (source: 0.75-2 and 5.1-5.9 s); threshold windows: turn "
                        f"{out['impact_windows_s']} s, P4 > 4 kPa {out['pressure_P4_windows_s']} s; largest turn "
-                       f"{math.degrees(max(out['angle_min_rad'], out['angle_max_rad'], key=abs)):.2f}°; P4 max "
-                       f"{out['pressure_P4_max_Pa']:.0f} Pa")
+                       f"{largest_turn}")
+    if not covered[1] and len(found) < 2:
+        out["headline"] += (f"; second impact not measured: the run ended before the source's window "
+                            f"({SOURCE_IMPACTS[1][0]:g}-{SOURCE_IMPACTS[1][1]:g} s) had passed, run to t ≥ "
+                            f"{SOURCE_IMPACTS[1][1] + IMPACT_MARGIN:g} s")
     if p.support == "spring":
-        out["headline"] += f"; period after 6 s {out.get('late_period_s')} s (dry {out['dry_period_s']:.4f} s)"
+        late_text = (f"{out['late_period_s']} s" if out.get("late_period_s") is not None
+                     else f"not measured: {out['late_period_s_not_measured']}")
+        out["headline"] += f"; period after 6 s {late_text} (dry {out['dry_period_s']:.4f} s)"
     else:
         out["headline"] += "; the beam held fixed (a rigid end wall)"
     return out

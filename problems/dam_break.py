@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mlsgalerkin.analysis.measured import not_measured
 from mlsgalerkin.data import reference_columns
 from mlsgalerkin.fluid import (
     SHIFTING_MODES,
@@ -115,13 +116,22 @@ def _read_columns(path: Path) -> dict[str, np.ndarray]:
 
 
 def analyse(result, p: Parameters, t_max: float = 3.0) -> dict:
-    """RMS deviation of ``Z(T)`` from Martin & Moyce for ``T ≤ t_max`` (interpolated at the data)."""
+    """RMS deviation of ``Z(T)`` from Martin & Moyce for ``T ≤ t_max`` (interpolated at the data),
+    measured only when the run covered every data point up to ``t_max``."""
     ts = result.timeseries
     a = p.column_width
-    T = np.asarray(ts["time"]) * math.sqrt(2.0 * p.g / a)
+    scale = math.sqrt(2.0 * p.g / a)          # T = t sqrt(2g/a)
+    T = np.asarray(ts["time"]) * scale
     Z = np.asarray(ts["front_x"]) / a
     data = load_martin_moyce()
-    out = {"T_max": t_max}
+    out = {"T_max": t_max, "T_end": float(T.max()), "particles_per_column_width": a / p.dx}
+    last = max(float(tz[tz[:, 0] <= t_max, 0].max()) for tz in data.values() if (tz[:, 0] <= t_max).any())
+    keys = ("rms_deviation_Z", "rms_deviation_Z_time_shifted", "best_time_shift_T", "mean_deviation_Z")
+    if T.max() + 1e-6 < last:
+        why = not_measured(out, keys, f"the run ended at T = {T.max():.2f}, before the last Martin & Moyce point "
+                                      f"at T = {last:.2f}", run_to=last / scale)
+        out["headline"] = f"surge front: RMS deviation from Martin & Moyce {why}"
+        return out
     devs = []
     for w, tz in sorted(data.items()):
         sel = (tz[:, 0] <= t_max) & (tz[:, 0] <= T.max())
@@ -132,7 +142,7 @@ def analyse(result, p: Parameters, t_max: float = 3.0) -> dict:
         devs.append(dev)
         out[f"rms_deviation_{w:g}in"] = float(np.sqrt(np.mean(dev**2)))
         out[f"points_{w:g}in"] = int(sel.sum())
-    alld = np.concatenate(devs) if devs else np.array([np.nan])
+    alld = np.concatenate(devs)
     out["rms_deviation_Z"] = float(np.sqrt(np.mean(alld**2)))
     # The experiment's time origin is uncertain (gate removal takes a finite time): also report
     # the deviation after the best shift T -> T + ΔT, 0 <= ΔT <= 0.5, clearly as a separate number.
@@ -146,7 +156,6 @@ def analyse(result, p: Parameters, t_max: float = 3.0) -> dict:
         best = min(best, (float(np.sqrt(np.mean(d**2))), float(shift)))
     out["rms_deviation_Z_time_shifted"], out["best_time_shift_T"] = best
     out["mean_deviation_Z"] = float(np.mean(alld))
-    out["particles_per_column_width"] = a / p.dx
     out["headline"] = (f"surge front: RMS deviation from Martin & Moyce {out['rms_deviation_Z']:.3f} (in Z = z/a) "
                        f"for T <= {t_max:g}, a/dx = {a / p.dx:.0f} ({out['rms_deviation_Z_time_shifted']:.3f} with "
                        f"the experiment's clock shifted by dT = {out['best_time_shift_T']:.2f})")

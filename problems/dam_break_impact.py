@@ -34,6 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mlsgalerkin.analysis.measured import not_measured
+from mlsgalerkin.analysis.signals import running_mean, spectral_period
 from mlsgalerkin.data import reference_columns
 from mlsgalerkin.fluid import (
     SHIFTING_MODES,
@@ -132,70 +134,91 @@ def load_reference() -> dict[str, np.ndarray]:
     return out
 
 
-def running_mean(T: np.ndarray, y: np.ndarray, window: float) -> np.ndarray:
-    """Mean of ``y`` over ``[T − window/2, T + window/2]`` at each sample (uneven spacing)."""
-    c = np.concatenate([[0.0], np.cumsum(y)])
-    lo = np.searchsorted(T, T - 0.5 * window, side="left")
-    hi = np.searchsorted(T, T + 0.5 * window, side="right")
-    return (c[hi] - c[lo]) / np.maximum(hi - lo, 1)
-
-
 def ringing_period(T: np.ndarray, y: np.ndarray, start: float, stop: float) -> float:
     """Period (in ``T``) of the strongest oscillation of ``y`` over ``[start, stop]``: the peak of
-    the amplitude spectrum of the series resampled evenly, with its quadratic trend removed;
-    NaN when the window holds fewer than 64 samples."""
+    the amplitude spectrum of the series resampled evenly on 1024 points, with its quadratic trend
+    removed (:func:`~mlsgalerkin.analysis.signals.spectral_period`); NaN when the window holds
+    fewer than 64 samples."""
     sel = (T >= start) & (T <= stop)
     if sel.sum() < 64:
         return math.nan
-    tt = np.linspace(T[sel][0], T[sel][-1], 1024)
-    yy = np.interp(tt, T, y)
-    yy = yy - np.polyval(np.polyfit(tt, yy, 2), tt)
-    amp = np.abs(np.fft.rfft(yy))
-    freq = np.fft.rfftfreq(tt.size, tt[1] - tt[0])
-    k = 1 + int(np.argmax(amp[1:]))
-    return float(1.0 / freq[k])
+    return spectral_period(T[sel], y[sel], samples=1024, detrend=2, hann=False)
+
+
+#: The interval (in ``T``) the P1 peak is searched in; the ringing period is measured over
+#: ``[T_peak + 0.1, T_peak + 1.1]``.
+PEAK_WINDOW_T = (2.0, 3.5)
+RINGING_AFTER_PEAK_T = (0.1, 1.1)
 
 
 def analyse(result, p: Parameters, window: tuple[float, float] = (2.0, 7.0)) -> dict:
     """P1 peak and time against the reference; RMS deviation and noise of ``p/(ρgH)`` per
-    sensor over ``window`` (in ``T``) — module docstring."""
+    sensor over ``window`` (in ``T``) — module docstring. Each is measured only when the run
+    covered what it needs (the peak window and one ringing period after the peak; the whole
+    deviation window)."""
     ts = result.timeseries
     scale = p.rho * p.g * p.height
-    T = np.asarray(ts["time"]) * math.sqrt(p.g / p.height)
+    to_T = math.sqrt(p.g / p.height)           # T = t sqrt(g/H)
+    T = np.asarray(ts["time"]) * to_T
     ref = load_reference()
     out: dict = {"T_end": float(T.max()), "particles_per_H": p.height / p.dx, "window_T": list(window)}
-    for k in range(1, 5):
-        name = f"P{k}"
-        y = np.asarray(ts[f"pressure_{name}"]) / scale
-        data = ref[name]
-        sel = (data[:, 0] >= window[0]) & (data[:, 0] <= min(window[1], T.max()))
-        if sel.sum() >= 3:
-            dev = np.interp(data[sel, 0], T, y) - data[sel, 1]
-            out[f"rms_deviation_{name}"] = float(np.sqrt(np.mean(dev**2)))
-            out[f"mean_deviation_{name}"] = float(np.mean(dev))
-        inside = (T >= window[0]) & (T <= window[1])
-        if inside.sum() > 10:
-            smooth = running_mean(T, y, 0.05)
-            out[f"noise_rms_{name}"] = float(np.sqrt(np.mean((y - smooth)[inside] ** 2)))
+    sensor_keys = [f"{what}_P{k}" for k in range(1, 5) for what in ("rms_deviation", "mean_deviation", "noise_rms")]
+    if T.max() + 1e-6 < window[1]:   # (to round-off: the default t_end reaches T = 7)
+        rms_text = not_measured(out, sensor_keys, f"the run ended at T = {T.max():.2f}, before the end of the "
+                                                  f"window T = {window[0]:g}..{window[1]:g}", run_to=window[1] / to_T)
+    else:
+        for k in range(1, 5):
+            name = f"P{k}"
+            y = np.asarray(ts[f"pressure_{name}"]) / scale
+            data = ref[name]
+            sel = (data[:, 0] >= window[0]) & (data[:, 0] <= min(window[1], T.max()))
+            if sel.sum() >= 3:
+                dev = np.interp(data[sel, 0], T, y) - data[sel, 1]
+                out[f"rms_deviation_{name}"] = float(np.sqrt(np.mean(dev**2)))
+                out[f"mean_deviation_{name}"] = float(np.mean(dev))
+            inside = (T >= window[0]) & (T <= window[1])
+            if inside.sum() > 10:
+                smooth = running_mean(T, y, 0.05)
+                out[f"noise_rms_{name}"] = float(np.sqrt(np.mean((y - smooth)[inside] ** 2)))
+        rms_text = ", ".join(f"P{k} {out[f'rms_deviation_P{k}']:.3f}" if f"rms_deviation_P{k}" in out
+                             else f"P{k} -" for k in range(1, 5))
     # P1 peak: the raw series rings after the impact at the acoustic period of the thin layer at
     # the wall (about 4 d/c0: weak compressibility's artefact, c0 ≈ 49 m/s, not water's 1480);
     # the peak is taken of the running mean over one measured ringing period, which removes it
     y1 = np.asarray(ts["pressure_P1"]) / scale
-    win = (T >= 2.0) & (T <= 3.5)
-    if win.any() and y1[win].max() > 0:
+    lo, hi = PEAK_WINDOW_T
+    d = ref["P1"]
+    r = d[(d[:, 0] >= lo) & (d[:, 0] <= hi)]
+    j = int(np.argmax(r[:, 1]))
+    out["P1_reference_peak"], out["P1_reference_peak_T"] = float(r[j, 1]), float(r[j, 0])
+    win = (T >= lo) & (T <= hi)
+    peak_keys = ("P1_peak_raw", "P1_peak_raw_T", "ringing_period_T", "P1_peak", "P1_peak_T", "P1_peak_error",
+                 "P1_peak_time_error_T")
+    if T.max() + 1e-6 < hi:
+        peak_text = not_measured(out, peak_keys, f"the run ended at T = {T.max():.2f}, before the peak window "
+                                                 f"T = {lo:g}..{hi:g} closed", run_to=(hi + RINGING_AFTER_PEAK_T[1]) / to_T)
+    elif not (win.any() and y1[win].max() > 0):
+        peak_text = not_measured(out, peak_keys, f"no positive pressure at P1 in T = {lo:g}..{hi:g}: the surge "
+                                                 "did not reach the wall (a finer spacing?)")
+    else:
         i_raw = np.flatnonzero(win)[np.argmax(y1[win])]
         out["P1_peak_raw"], out["P1_peak_raw_T"] = float(y1[i_raw]), float(T[i_raw])
-        period = ringing_period(T, y1, T[i_raw] + 0.1, T[i_raw] + 1.1)
-        out["ringing_period_T"] = period
-        sm = running_mean(T, y1, period) if math.isfinite(period) else y1
-        i = np.flatnonzero(win)[np.argmax(sm[win])]
-        out["P1_peak"], out["P1_peak_T"] = float(sm[i]), float(T[i])
-        d = ref["P1"]
-        r = d[(d[:, 0] >= 2.0) & (d[:, 0] <= 3.5)]
-        j = int(np.argmax(r[:, 1]))
-        out["P1_reference_peak"], out["P1_reference_peak_T"] = float(r[j, 1]), float(r[j, 0])
-        out["P1_peak_error"] = out["P1_peak"] / out["P1_reference_peak"] - 1.0
-        out["P1_peak_time_error_T"] = out["P1_peak_T"] - out["P1_reference_peak_T"]
+        ring_to = T[i_raw] + RINGING_AFTER_PEAK_T[1]
+        period = (ringing_period(T, y1, T[i_raw] + RINGING_AFTER_PEAK_T[0], ring_to) if T.max() >= ring_to
+                  else math.nan)
+        if not math.isfinite(period):
+            peak_text = not_measured(out, peak_keys[2:], f"the ringing after the raw peak at T = {T[i_raw]:.2f} "
+                                                         f"(T = {T[i_raw] + RINGING_AFTER_PEAK_T[0]:.2f}..{ring_to:.2f}) "
+                                                         "was not covered by 64 samples", run_to=ring_to / to_T)
+            peak_text += f" (raw peak {out['P1_peak_raw']:.2f} at T = {out['P1_peak_raw_T']:.2f})"
+        else:
+            out["ringing_period_T"] = period
+            sm = running_mean(T, y1, period)
+            i = np.flatnonzero(win)[np.argmax(sm[win])]
+            out["P1_peak"], out["P1_peak_T"] = float(sm[i]), float(T[i])
+            out["P1_peak_error"] = out["P1_peak"] / out["P1_reference_peak"] - 1.0
+            out["P1_peak_time_error_T"] = out["P1_peak_T"] - out["P1_reference_peak_T"]
+            peak_text = f"{out['P1_peak']:.2f} at T = {out['P1_peak_T']:.2f}"
     # mechanical energy: the share of the releasable potential energy (column → the same water at
     # rest over the whole tank) that has gone by the end (dissipated, or stored by compression)
     if "kinetic_energy" in ts and "potential_energy" in ts:
@@ -204,12 +227,10 @@ def analyse(result, p: Parameters, window: tuple[float, float] = (2.0, 7.0)) -> 
         rest_depth = 2.0 * p.height**2 / (p.tank_length_factor * p.height)
         E_rest = mass * p.g * 0.5 * rest_depth
         out["energy_lost_fraction"] = float((E[0] - E[-1]) / (E[0] - E_rest))
-    rms = [out.get(f"rms_deviation_P{k}", math.nan) for k in range(1, 5)]
     out["headline"] = (
-        f"H/dx = {p.height / p.dx:.0f}: P1 peak {out.get('P1_peak', math.nan):.2f} at T = "
-        f"{out.get('P1_peak_T', math.nan):.2f} (De Courcy et al. 2024: {out.get('P1_reference_peak', math.nan):.2f} at "
-        f"{out.get('P1_reference_peak_T', math.nan):.2f}); RMS deviation of p/(rho g H) over T = 2..7: "
-        + ", ".join(f"P{k} {v:.3f}" for k, v in enumerate(rms, start=1)))
+        f"H/dx = {p.height / p.dx:.0f}: P1 peak {peak_text} (De Courcy et al. 2024: {out['P1_reference_peak']:.2f} at "
+        f"{out['P1_reference_peak_T']:.2f}); RMS deviation of p/(rho g H) over T = {window[0]:g}..{window[1]:g}: "
+        + rms_text)
     return out
 
 

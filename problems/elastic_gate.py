@@ -41,6 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 from skfem import FacetBasis, LinearForm, MeshQuad, asm
 
+from mlsgalerkin.analysis.measured import not_measured
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.data import reference_columns
 from mlsgalerkin.fluid import (
@@ -184,30 +185,57 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     )
 
 
+#: The run must reach this multiple of the reference peak's time before a peak is measured.
+PEAK_MARGIN = 1.25
+
+
 def analyse(result, p: Parameters) -> dict:
+    """The tip's peak against the reference (measured once the run is past ``PEAK_MARGIN`` times the
+    reference peak's time and the tip has turned back) and its RMS error over the reference's
+    points (once the run covered them all)."""
     ts = result.timeseries
     t = np.asarray(ts["time"])
     ref = load_reference()
     out: dict = {"young_Pa": p.young, "poisson": p.poisson, "model": p.model}
-    for c in ("x", "y"):
-        y = np.asarray(ts[f"tip_{c}"])
-        r = ref[c]
-        inside = r[:, 0] <= t[-1]
-        if inside.any():
-            diff = np.interp(r[inside, 0], t, y) - r[inside, 1]
-            out[f"tip_{c}_rms_error_m"] = float(np.sqrt(np.mean(diff**2)))
-        k = int(np.argmax(y))
-        out[f"tip_{c}_peak_m"], out[f"tip_{c}_peak_time_s"] = float(y[k]), float(t[k])
     rx = ref["x"]
     kx = int(np.argmax(rx[:, 1]))
     out["reference_tip_x_peak_m"], out["reference_tip_x_peak_time_s"] = float(rx[kx, 1]), float(rx[kx, 0])
-    out["tip_x_peak_error"] = out["tip_x_peak_m"] / out["reference_tip_x_peak_m"] - 1.0
-    out["tip_x_peak_time_error_s"] = out["tip_x_peak_time_s"] - out["reference_tip_x_peak_time_s"]
+    peak_after = PEAK_MARGIN * out["reference_tip_x_peak_time_s"]
+    for c in ("x", "y"):
+        y = np.asarray(ts[f"tip_{c}"])
+        r = ref[c]
+        if t[-1] + 1e-6 >= r[-1, 0]:   # the run covered the reference (to a microsecond of round-off)
+            inside = r[:, 0] <= t[-1]
+            diff = np.interp(r[inside, 0], t, y) - r[inside, 1]
+            out[f"tip_{c}_rms_error_m"] = float(np.sqrt(np.mean(diff**2)))
+        else:
+            not_measured(out, f"tip_{c}_rms_error_m", f"the run ended at t = {t[-1]:.3g} s, before the reference's "
+                                                      f"last point at {r[-1, 0]:.3g} s", run_to=float(r[-1, 0]))
+        k = int(np.argmax(y))
+        keys = [f"tip_{c}_peak_m", f"tip_{c}_peak_time_s"] + (["tip_x_peak_error", "tip_x_peak_time_error_s"]
+                                                              if c == "x" else [])
+        if t[-1] < peak_after:
+            peak_text = not_measured(out, keys, f"the run ended at t = {t[-1]:.3g} s, before the reference peak at "
+                                                f"{out['reference_tip_x_peak_time_s']:.3f} s had passed", run_to=peak_after)
+        elif k == t.size - 1:
+            peak_text = not_measured(out, keys, f"tip_{c} was still rising at the end of the run",
+                                     run_to=t[-1] + 0.25 * out["reference_tip_x_peak_time_s"])
+        else:
+            out[f"tip_{c}_peak_m"], out[f"tip_{c}_peak_time_s"] = float(y[k]), float(t[k])
+            peak_text = ""
+        if c == "x":
+            x_peak_text = peak_text
+    if not x_peak_text:
+        out["tip_x_peak_error"] = out["tip_x_peak_m"] / out["reference_tip_x_peak_m"] - 1.0
+        out["tip_x_peak_time_error_s"] = out["tip_x_peak_time_s"] - out["reference_tip_x_peak_time_s"]
     out.update(numerical_dissipation(result, math.sqrt(2.0 * p.g * p.column_height), p.column_height))
-    out["headline"] = (f"tip_x peak {1e3 * out['tip_x_peak_m']:.1f} mm at {out['tip_x_peak_time_s']:.3f} s vs "
-                       f"{1e3 * out['reference_tip_x_peak_m']:.1f} mm at {out['reference_tip_x_peak_time_s']:.3f} s "
-                       f"({100 * out['tip_x_peak_error']:+.1f} %, {out['tip_x_peak_time_error_s']:+.3f} s); "
-                       f"E = {p.young / 1e6:g} MPa, ν = {p.poisson:g}")
+    measured = (f"{1e3 * out['tip_x_peak_m']:.1f} mm at {out['tip_x_peak_time_s']:.3f} s" if not x_peak_text
+                else x_peak_text)
+    versus = (f" ({100 * out['tip_x_peak_error']:+.1f} %, {out['tip_x_peak_time_error_s']:+.3f} s)" if not x_peak_text
+              else "")
+    reference = f"{1e3 * out['reference_tip_x_peak_m']:.1f} mm at {out['reference_tip_x_peak_time_s']:.3f} s"
+    out["headline"] = (f"tip_x peak {measured} vs {reference}{versus}" if not x_peak_text
+                       else f"tip_x peak {measured} (reference {reference})") + f"; E = {p.young / 1e6:g} MPa, ν = {p.poisson:g}"
     return out
 
 

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mlsgalerkin.analysis.measured import not_measured
 from mlsgalerkin.fluid import (
     SHIFTING_MODES,
     FluidBody,
@@ -133,7 +134,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
 
 def analyse(result, p: Parameters) -> dict:
     """Spurious speed and pressure deviation: their maxima and their means over the last
-    ``settle`` seconds."""
+    ``settle`` seconds (measured once the run has lasted twice ``settle``, so that the start is
+    not among them)."""
     ts = result.timeseries
     t = np.asarray(ts["time"])
     speed = np.asarray(ts["max_speed_ratio"])
@@ -144,6 +146,14 @@ def analyse(result, p: Parameters) -> dict:
         "pressure_rms_ratio_max": float(pres.max()), "late_pressure_rms_ratio": float(pres[late].mean()),
         "rows_per_depth": p.depth / p.dx, "t_end": float(t[-1]),
     }
+    largest = (f"largest speed {100 * out['max_speed_ratio']:.2f} % of sqrt(g' D), largest pressure RMS deviation "
+               f"{100 * out['pressure_rms_ratio_max']:.2f} % of drho g D")
+    if t[-1] + 1e-9 < 2.0 * p.settle:
+        text = not_measured(out, ("late_max_speed_ratio", "late_pressure_rms_ratio"),
+                            f"the run ended at t = {t[-1]:.3g} s: its last {p.settle:g} s (settle) would include "
+                            "the start", run_to=2.0 * p.settle)
+        out["headline"] = f"at rest for {t[-1]:.2f} s: {largest}; over the last {p.settle:g} s {text}"
+        return out
     out["headline"] = (f"at rest for {t[-1]:.2f} s: largest speed {100 * out['max_speed_ratio']:.2f} % of sqrt(g' D) "
                        f"(last {p.settle:g} s: {100 * out['late_max_speed_ratio']:.2f} %); pressure RMS deviation "
                        f"{100 * out['late_pressure_rms_ratio']:.2f} % of drho g D over the last {p.settle:g} s "

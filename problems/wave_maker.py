@@ -39,6 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mlsgalerkin.analysis.measured import not_measured
 from mlsgalerkin.fluid import (
     FluidBody,
     Phase,
@@ -175,10 +176,18 @@ def analyse(result, p: Parameters) -> dict:
            "window_s": [t_from, t_to], "rows_per_depth": p.depth / p.dx}
     sel = (t >= t_from) & (t <= t_to)
     if t_to - t_from < 2 * p.period or np.count_nonzero(sel) < 20:
-        out["note"] = (f"no steady window: the run must reach t = {t_from + 2 * p.period:.2f} s with a tank "
-                       f"long enough that the reflection returns after it (now t_end = {p.t_end:g} s, window "
-                       f"{t_from:.2f}–{t_to:.2f} s)")
-        out["headline"] = f"wave height not measured: {out['note']}"
+        cg = out["group_velocity_m_s"]
+        reflection = (2 * p.tank_length - p.probe_x) / cg - p.period   # when the far wall's reflection returns
+        if reflection - t_from < 2 * p.period:
+            why, run_to = (f"no steady window: the far wall's reflection reaches the probe at {reflection:.2f} s, less "
+                           f"than two periods after the waves settle there ({t_from:.2f} s); lengthen the tank "
+                           f"(tank_length) or move the probe (probe_x)"), None
+        else:
+            why, run_to = (f"no steady window: the run ended at t = {t[-1]:.3g} s, before two periods of steady waves "
+                           f"at the probe (from {t_from:.2f} s)"), t_from + 2 * p.period
+        text = not_measured(out, ("wave_height_m", "H_over_S", "relative_error"), why, run_to=run_to)
+        out["note"] = out["wave_height_m_not_measured"]
+        out["headline"] = f"wave height {text}"
         return out
     omega = 2 * math.pi / p.period
     A = np.column_stack([np.ones(sel.sum()), np.cos(omega * t[sel]), np.sin(omega * t[sel]),

@@ -168,13 +168,24 @@ def test_no_import_cycle_between_top_level_packages():
 
 
 def test_io_is_a_bottom_layer():
-    """io/ (files, checkpoints, frames, pictures) imports nothing from the solvers, the run loop
-    or the studies: everything can write files, files depend on nothing above them."""
+    """io/ (files, checkpoints, frames) imports nothing from the solvers, the run loop, the
+    studies or the pictures: everything can write files, files depend on nothing above them."""
     forbidden = ("mlsgalerkin.fluid", "mlsgalerkin.simulation", "mlsgalerkin.studies", "mlsgalerkin.scene",
-                 "mlsgalerkin.monitors", "mlsgalerkin.dynamics", "mlsgalerkin.problem")
+                 "mlsgalerkin.monitors", "mlsgalerkin.dynamics", "mlsgalerkin.problem", "mlsgalerkin.plots")
     bad = sorted((a, b) for a, b in import_edges(module_names())
                  if a.startswith("mlsgalerkin.io") and b.startswith(forbidden))
     assert not bad, f"io imports from higher layers: {bad}"
+
+
+def test_pictures_sit_on_the_files_only():
+    """plots/ (the pictures of a run) reads files through io and imports nothing from the solvers,
+    the run loop or the studies: a run directory is drawn from its files alone."""
+    allowed = ("mlsgalerkin.plots", "mlsgalerkin.io")
+    bad = sorted((a, b) for a, b in import_edges(module_names())
+                 if a.startswith("mlsgalerkin.plots") and not b.startswith(allowed) and b != "mlsgalerkin")
+    assert not bad, f"plots imports beyond io: {bad}"
+    assert any(a.startswith("mlsgalerkin.plots") and b.startswith("mlsgalerkin.io") for a, b in
+               import_edges(module_names())), "the check sees plots' imports of io"
 
 
 def test_shipped_problems_use_only_the_public_api():
@@ -196,11 +207,13 @@ def test_shipped_problems_use_only_the_public_api():
 
 
 def test_the_run_loop_knows_no_physics():
-    """simulation, scene, dynamics and monitors import nothing from fluid (or a structure package)."""
+    """simulation, scene, dynamics, monitors and the problem runner import nothing from fluid (or a
+    structure package)."""
     layer = ("mlsgalerkin.simulation", "mlsgalerkin.scene", "mlsgalerkin.dynamics", "mlsgalerkin.monitors",
-             "mlsgalerkin.motion")
+             "mlsgalerkin.motion", "mlsgalerkin.problem", "mlsgalerkin.limits")
     bad = sorted((a, b) for a, b in import_edges(module_names())
-                 if a.startswith(layer) and b.startswith(("mlsgalerkin.fluid", "mlsgalerkin.problems")))
+                 if (a in layer or a.startswith(tuple(m + "." for m in layer)))
+                 and b.startswith(("mlsgalerkin.fluid", "mlsgalerkin.problems")))
     assert not bad, f"the run loop imports physics: {bad}"
 
 

@@ -1,9 +1,8 @@
-"""Output package: VTU/PVD round trips, checkpoints, CSV time series, rendering, atomicity."""
+"""Output package: VTU/PVD round trips, checkpoints, CSV time series, atomicity (pictures: test_render_pictures.py)."""
 
 from __future__ import annotations
 
 import json
-import logging
 import math
 import os
 import subprocess
@@ -16,7 +15,6 @@ import pytest
 
 from mlsgalerkin import io as mio
 from mlsgalerkin.io import checkpoint as ckpt
-from mlsgalerkin.io import render
 
 
 def _leftovers(directory: Path) -> list[str]:
@@ -417,97 +415,8 @@ def test_failed_timeseries_flush_keeps_the_previous_file(tmp_path, monkeypatch):
 
 
 # ----------------------------------------------------------------------------------------
-# rendering
+# imports
 # ----------------------------------------------------------------------------------------
-
-Image = pytest.importorskip("PIL.Image")
-
-
-def _grid(nx: int = 8, ny: int = 4) -> np.ndarray:
-    x, y = np.meshgrid(np.linspace(0.0, 2.0, nx), np.linspace(0.0, 1.0, ny))
-    return np.column_stack([x.ravel(), y.ravel()])
-
-
-def _check_png(path: Path, size: tuple[int, int]) -> None:
-    assert path.is_file() and path.stat().st_size > 0
-    with Image.open(path) as im:
-        assert im.format == "PNG" and im.size == size
-        pixels = np.asarray(im.convert("RGB"))
-    assert pixels.std() > 0  # not a blank image
-
-
-def test_render_snapshot_writes_a_png_in_2d_and_3d(tmp_path, rng):
-    x = _grid()
-    path = mio.render_snapshot(tmp_path / "p.png", x, x[:, 0] * x[:, 1], title="p",
-                               time=0.25, window_size=(160, 96))
-    _check_png(path, (160, 96))
-    x3 = rng.random((20, 3))
-    path3 = mio.render_snapshot(tmp_path / "p3.png", x3, x3[:, 2], window_size=(128, 96),
-                                clim=(0.0, 1.0))
-    _check_png(path3, (128, 96))
-    assert _leftovers(tmp_path) == []
-
-
-def test_render_animation_writes_a_gif_with_several_frames(tmp_path):
-    x = _grid()
-    frames = [(0.1 * k, x + 0.05 * k, np.sin(x[:, 0] + k)) for k in range(3)]
-    path = mio.render_animation(tmp_path / "a.gif", frames, fps=5, window_size=(128, 80))
-    with Image.open(path) as im:
-        assert im.format == "GIF" and im.size == (128, 80)
-        assert im.n_frames == 3
-
-
-def test_render_vtu_series_animates_a_pvd(tmp_path):
-    series = mio.PVDSeries(tmp_path / "out")
-    for k in range(3):
-        series.add(0.1 * k, *_frame(k, n=6))
-    gif = mio.render_vtu_series(tmp_path / "out" / "particles.pvd", "u", tmp_path / "u.gif",
-                                window_size=(128, 80), fps=4)
-    with Image.open(gif) as im:
-        assert im.n_frames == 3
-    with pytest.raises(ValueError, match="no point_data 'q'.*available"):
-        mio.render_vtu_series(series.pvd_path, "q", tmp_path / "q.gif")
-
-
-def test_matplotlib_backend_writes_png_and_gif(tmp_path, rng):
-    x = _grid()
-    png = mio.render_snapshot(tmp_path / "m.png", x, x[:, 0], backend="matplotlib",
-                              window_size=(160, 96))
-    _check_png(png, (160, 96))
-    x3 = rng.random((10, 3))
-    frames = [(0.0, x3, x3[:, 0]), (1.0, x3 + 0.1, x3[:, 1])]
-    gif = mio.render_animation(tmp_path / "m.gif", frames, backend="matplotlib",
-                               window_size=(160, 96))
-    with Image.open(gif) as im:
-        assert im.n_frames == 2
-
-
-def test_auto_backend_falls_back_to_matplotlib_with_a_warning(tmp_path, monkeypatch, caplog):
-    monkeypatch.setattr(render, "_probe", lambda window: (False, "no OpenGL context"))
-    with caplog.at_level(logging.WARNING, logger="mlsgalerkin.io.render"):
-        assert render.offscreen_backend.__wrapped__() == "matplotlib"  # uncached check
-    assert "no OpenGL context" in caplog.text and "matplotlib" in caplog.text
-
-    monkeypatch.setattr(render, "offscreen_backend", lambda: "matplotlib")
-    x = _grid()
-    _check_png(mio.render_snapshot(tmp_path / "f.png", x, x[:, 0], window_size=(96, 64)),
-               (96, 64))
-    with pytest.raises(RuntimeError, match="cannot render off screen"):
-        mio.render_snapshot(tmp_path / "g.png", x, x[:, 0], backend="pyvista")
-
-
-def test_render_rejects_bad_input(tmp_path):
-    x = _grid()
-    with pytest.raises(ValueError, match=r"scalars must have shape \(32,\)"):
-        mio.render_snapshot(tmp_path / "b.png", x, np.zeros(3))
-    with pytest.raises(ValueError, match="backend must be one of"):
-        mio.render_snapshot(tmp_path / "b.png", x, x[:, 0], backend="povray")
-    with pytest.raises(ValueError, match="clim"):
-        mio.render_snapshot(tmp_path / "b.png", x, x[:, 0], clim=(1.0, 1.0),
-                            backend="matplotlib")
-    with pytest.raises(ValueError, match="frames is empty"):
-        mio.render_animation(tmp_path / "b.gif", [])
-    assert not list(tmp_path.iterdir())
 
 
 def test_importing_the_package_does_not_import_heavy_libraries():

@@ -77,5 +77,8 @@ def test_a_problem_runs_end_to_end_from_a_non_editable_install(wheel, tmp_path):
                          env=env, timeout=900)
     assert run.returncode == 0, run.stderr[-3000:]
     summary = json.loads((tmp_path / "db" / "summary.json").read_text())
-    assert summary["status"] == "completed" and summary["results"]["rms_deviation_Z"] > 0
+    assert summary["status"] == "completed"
+    # 0.08 s ends before the experiment's last point (T = 2.95): the analysis says so, with no number
+    assert summary["results"]["rms_deviation_Z"] is None
+    assert "run to t ≥" in summary["results"]["rms_deviation_Z_not_measured"]
     assert "surge front" in run.stdout

@@ -2,6 +2,7 @@
 a user's own problem file, and ``python -m mlsgalerkin``."""
 
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -10,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mlsgalerkin.analysis.measured import unexplained_values
 from mlsgalerkin.cli import main
 from mlsgalerkin.problem import ProblemError, load_problem, parse_overrides, run_problem
 from mlsgalerkin.problems import PROBLEMS
@@ -36,6 +38,16 @@ def test_problem_smoke_run_writes_outputs(name, tmp_path):
     ts = result.timeseries
     assert np.all(ts["total_mass"] == ts["total_mass"][0])  # mass exact
     assert all(np.all(np.isfinite(ts[c])) for c in ("kinetic_energy", "max_speed"))
+    # honest results: a smoke run covers no event, so its headline says what was not measured and
+    # why; it never shows NaN, infinity or "None", and every number is finite or None with a reason
+    headline = results["headline"]
+    assert not re.search(r"\b(nan|inf|infinity|none)\b", headline, flags=re.IGNORECASE), headline
+    assert unexplained_values(results) == [], (name, unexplained_values(results))
+    assert unexplained_values(summary["results"]) == []
+    reasons = {k: v for k, v in results.items() if k.endswith("_not_measured")}
+    assert all(isinstance(v, str) and len(v) > 20 for v in reasons.values()), reasons
+    if "not measured" in headline:     # the headline's reason is one of the results' reasons
+        assert any(v in headline for v in reasons.values()), (headline, reasons)
 
 
 def test_cli_run_sets_parameters_and_reports(tmp_path, capsys):

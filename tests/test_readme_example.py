@@ -37,3 +37,8 @@ def test_readme_fluid_example_runs(tmp_path, monkeypatch):
         exec(compile(code, "README.md", "exec"), {"__name__": "__readme__"})
     assert "surge front" in out.getvalue()
     assert (tmp_path / "results" / "db" / "summary.json").is_file()
+    claimed = [line.lstrip("# ").rstrip() for line in code.splitlines() if line.startswith("# ")]
+    assert claimed, "the README shows no printed output for the run_problem example"
+    printed = [line.strip() for line in out.getvalue().splitlines() if line.strip()]
+    assert claimed == printed[-len(claimed):], f"README claims {claimed}, the example printed {printed}"
+    assert not any(word in printed[-1].lower().split() for word in ("nan", "inf", "none"))

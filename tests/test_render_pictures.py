@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 
 from mlsgalerkin.cli import main
-from mlsgalerkin.io.render_fields import FIELDS, field_name_problem, resolve_field
-from mlsgalerkin.io.render_frames import WALL_COLOR, frame_figure, frame_view, time_text
-from mlsgalerkin.io.render_timeseries import timeseries_figure
+from mlsgalerkin.plots.fields import FIELDS, field_name_problem, resolve_field
+from mlsgalerkin.plots.frames import WALL_COLOR, frame_figure, frame_view, time_text
+from mlsgalerkin.plots.timeseries import timeseries_figure
 from mlsgalerkin.monitors import Output, Pictures, RunInfo
 
 Image = pytest.importorskip("PIL.Image")

@@ -1,4 +1,6 @@
-"""Verification tools: error norms against closed-form solutions and convergence rates."""
+"""Verification tools: error norms against closed-form solutions and convergence rates; signal
+analysis of time series (:mod:`~mlsgalerkin.analysis.signals`); results a run did not measure
+(:mod:`~mlsgalerkin.analysis.measured`)."""
 
 from mlsgalerkin.analysis.convergence import (
     ROUNDOFF,
@@ -8,6 +10,7 @@ from mlsgalerkin.analysis.convergence import (
     observed_order,
     observed_orders,
 )
+from mlsgalerkin.analysis.measured import not_measured, unexplained_values
 from mlsgalerkin.analysis.norms import (
     ErrorNorms,
     Quadrature,
@@ -15,6 +18,15 @@ from mlsgalerkin.analysis.norms import (
     h1_seminorm_error,
     l2_error,
     rectangle_quadrature,
+)
+from mlsgalerkin.analysis.signals import (
+    crossing_period,
+    grid_average,
+    half_height_window,
+    running_mean,
+    spectral_period,
+    threshold_windows,
+    upward_crossings,
 )
 
 __all__ = [
@@ -30,4 +42,13 @@ __all__ = [
     "h1_seminorm_error",
     "l2_error",
     "rectangle_quadrature",
+    "not_measured",
+    "unexplained_values",
+    "crossing_period",
+    "grid_average",
+    "half_height_window",
+    "running_mean",
+    "spectral_period",
+    "threshold_windows",
+    "upward_crossings",
 ]

@@ -16,10 +16,7 @@ and velocity are extrapolated from the fluid every step (see :mod:`mlsgalerkin.f
 
 from __future__ import annotations
 
-import contextlib
 import math
-from collections.abc import Iterator
-from contextvars import ContextVar
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -33,6 +30,7 @@ from mlsgalerkin.contact.surface import (
     surface_points,
 )
 from mlsgalerkin.dynamics import Body
+from mlsgalerkin.limits import ParticleLimitError, check_size, particle_limit
 from mlsgalerkin.motion import Motion
 from mlsgalerkin.neighbors import as_coordinates
 
@@ -40,35 +38,6 @@ from mlsgalerkin.neighbors import as_coordinates
 FLUID_SOLVER = "mlsgalerkin.fluid.solver:FluidSolver"
 
 __all__ = ["FluidBody", "ParticleLimitError", "Phase", "WallBody", "lattice", "particle_limit", "wall_box"]
-
-#: The largest lattice :func:`lattice` builds in the current context (``None``: no limit).
-_LATTICE_LIMIT: ContextVar[int | None] = ContextVar("lattice_limit", default=None)
-
-
-class ParticleLimitError(ValueError):
-    """A lattice would hold more particles than the current :func:`particle_limit` allows."""
-
-
-def _check_limit(count: float, what: str, spacing: float) -> None:
-    """Raise :class:`ParticleLimitError` if ``count`` points exceed the current limit."""
-    limit = _LATTICE_LIMIT.get()
-    if limit is not None and count > limit:
-        raise ParticleLimitError(
-            f"{what} at spacing {spacing:g} m) would hold {count:.3g} particles, which exceeds the limit of "
-            f"{limit:.3g}; coarsen the spacing, or raise the limit (--max-particles) if the machine has the memory "
-            "and the time")
-
-
-@contextlib.contextmanager
-def particle_limit(n: int | None) -> Iterator[None]:
-    """Within the block, :func:`lattice` refuses (before allocating anything) to build more than
-    ``n`` points in one call; ``mlsgalerkin run`` sets it from ``--max-particles``."""
-    token = _LATTICE_LIMIT.set(n)
-    try:
-        yield
-    finally:
-        _LATTICE_LIMIT.reset(token)
-
 
 @dataclass(frozen=True)
 class Phase:
@@ -106,7 +75,7 @@ def lattice(lower: ArrayLike, upper: ArrayLike, spacing: float) -> NDArray[np.fl
             "across the smallest feature)")
     with np.errstate(over="ignore"):  # a product beyond 1e308 is inf: above any limit
         count = float(np.prod(np.maximum(np.round(ratio), 1.0)))
-    _check_limit(count, f"a lattice (box {np.round(hi - lo, 6).tolist()} m", spacing)
+    check_size(count, f"a lattice (box {np.round(hi - lo, 6).tolist()} m", spacing)
     counts = np.maximum(np.round(ratio).astype(int), 1)
     axes = [lo[a] + (np.arange(counts[a]) + 0.5) * spacing for a in range(lo.size)]
     grid = np.meshgrid(*axes, indexing="ij")
@@ -132,6 +101,8 @@ class FluidBody(Body):
     """
 
     solver: ClassVar[str] = FLUID_SOLVER
+    #: What a particle of this body is, for the counts a run reports ("12,000 particles (9,000 fluid)").
+    particle_kind: ClassVar[str] = "fluid"
     name: str
     positions: NDArray[np.float64]
     spacing: float
@@ -244,6 +215,8 @@ class WallBody(Body):
     """
 
     solver: ClassVar[str] = FLUID_SOLVER
+    #: What a particle of this body is, for the counts a run reports.
+    particle_kind: ClassVar[str] = "wall"
     name: str
     positions: NDArray[np.float64] | None = None
     spacing: float | None = None
@@ -351,11 +324,11 @@ class WallBody(Body):
             raise ValueError(f"wall body {name!r}: layers must be a positive integer, got {layers!r}")
         total = float(surface.measures().sum())
         if surface.dim == 2:
-            _check_limit((total / spacing + surface.n_facets) * layers, f"wall particles on a surface "
+            check_size((total / spacing + surface.n_facets) * layers, f"wall particles on a surface "
                          f"({surface.n_facets} segments", spacing)
         else:  # each triangle has at most (√A/spacing + ½)² points
             per = (np.sqrt(surface.measures()) / spacing + 0.5) ** 2
-            _check_limit(float(np.maximum(per, 1.0).sum()) * layers, f"wall particles on a surface "
+            check_size(float(np.maximum(per, 1.0).sum()) * layers, f"wall particles on a surface "
                          f"({surface.n_facets} triangles", spacing)
         pts = surface_points(surface, spacing)
         k = pts.average.shape[0]
@@ -411,7 +384,7 @@ def wall_box(
     if layers == 0:
         return WallBody(name, reference_density=reference_density, surface=tank)
     size = (hi - lo) / spacing
-    _check_limit(layers * (2.0 * (size[0] + 2 * layers) + 2.0 * size[1]), f"a wall box ({np.round(hi - lo, 6).tolist()} m",
+    check_size(layers * (2.0 * (size[0] + 2 * layers) + 2.0 * size[1]), f"a wall box ({np.round(hi - lo, 6).tolist()} m",
                  spacing)
     # layers k = 0..layers-1 at (k + 1/2) spacing outside each side; the bottom (and top)
     # rows run under the side walls to fill the corners. Built side by side, so a box whose

@@ -68,6 +68,7 @@ from mlsgalerkin.assembly import integration_terms, integration_terms_reference
 from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.kernels import Kernel, get_kernel, kernel_f_df
+from mlsgalerkin.pairs import pair_offset
 
 if TYPE_CHECKING:  # pragma: no cover
     from mlsgalerkin.approximation.table import ShapeTable
@@ -86,10 +87,7 @@ def _shepard(x, h, volume, indptr, indices, kid, support, norm_d, out):
         acc = 0.0
         for p in range(indptr[k], indptr[k + 1]):
             j = indices[p]
-            r2 = 0.0
-            for a in range(dim):
-                d = x[k, a] - x[j, a]
-                r2 += d * d
+            _, _, _, r2 = pair_offset(x, k, j)
             f, _ = kernel_f_df(kid, np.sqrt(r2) / hk, support, dim)
             acc += f * volume[j]
         out[k] = acc * norm_d / hk**dim

@@ -34,6 +34,7 @@ from numba import prange
 from numpy.typing import NDArray
 
 from mlsgalerkin.kernels import kernel_f_df
+from mlsgalerkin.pairs import pair_offset
 
 __all__ = ["GRADIENT_FIELD", "MIN_EIGENVALUE", "ratio_gradient_mls", "ratio_gradient", "ratio_gradient_reference", "symmetric_min_eigenvalue"]
 
@@ -79,10 +80,7 @@ def _ratio_gradient(x, ratio, volume, h, phase, indptr, indices, n_fluid, kid, s
             j = indices[q]
             if j == i or j >= n_fluid or phase[j] != phase[i]:
                 continue
-            d0 = x[j, 0] - x[i, 0]
-            d1 = x[j, 1] - x[i, 1]
-            d2 = x[j, 2] - x[i, 2] if dim == 3 else 0.0
-            r2 = d0 * d0 + d1 * d1 + d2 * d2
+            d0, d1, d2, r2 = pair_offset(x, i, j)   # x_ji = x_j − x_i
             if r2 <= 0.0:
                 continue
             hij = 0.5 * (h[i] + h[j])

@@ -51,6 +51,7 @@ from mlsgalerkin.fluid.effect import Effect, EffectContext, check_positive
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.fluid.time_step import density_diffusion_limit
 from mlsgalerkin.kernels import get_kernel, kernel_f_df
+from mlsgalerkin.pairs import pair_offset
 
 __all__ = ["CORRECTIONS", "DensityDiffusion", "density_diffusion_rate", "density_diffusion_rate_reference"]
 
@@ -75,10 +76,7 @@ def _diffusion(x, ratio, rho0, volume, h, phase, indptr, indices, n_fluid, kid, 
             j = indices[q]
             if j == i or j >= n_fluid or phase[j] != phase[i]:
                 continue
-            d0 = x[j, 0] - x[i, 0]
-            d1 = x[j, 1] - x[i, 1]
-            d2 = x[j, 2] - x[i, 2] if dim == 3 else 0.0
-            r2 = d0 * d0 + d1 * d1 + d2 * d2
+            d0, d1, d2, r2 = pair_offset(x, i, j)   # x_ji = x_j − x_i
             if r2 <= 0.0:
                 continue
             hij = 0.5 * (h[i] + h[j])

@@ -20,6 +20,7 @@ from numba import prange
 from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.kernels import get_kernel, kernel_f_df
+from mlsgalerkin.pairs import pair_offset
 
 __all__ = ["DensityFilter", "mls_ratio_filter", "mls_ratio_filter_reference", "shepard_ratio_filter"]
 
@@ -49,10 +50,7 @@ def _shepard_filter(indptr, indices, x, rho, rho0, M, h, n_fluid, kid, support, 
             j = indices[q]
             if j >= n_fluid:
                 continue
-            r2 = 0.0
-            for a in range(dim):
-                d = x[i, a] - x[j, a]
-                r2 += d * d
+            _, _, _, r2 = pair_offset(x, i, j)
             w, _ = kernel_f_df(kid, np.sqrt(r2) / h[j], support, dim)
             w *= M[j] / rho[j] / h[j] ** dim
             s += w * rho[j] / rho0[j]

@@ -71,6 +71,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
+from mlsgalerkin.pairs import pair_offset
 from mlsgalerkin.neighbors import NeighborTable, as_coordinates
 
 __all__ = [
@@ -152,9 +153,8 @@ def _circle_coverage_kernel(x, indptr, indices, radius, dirs):
                 j = indices[p]
                 if j == i:
                     continue
-                dx = x[j, 0] - x[i, 0]
-                dy = x[j, 1] - x[i, 1]
-                if dx * dx + dy * dy < reach2:
+                dx, dy, _, rr = pair_offset(x, i, j)
+                if rr < reach2:
                     rel[m, 0] = dx
                     rel[m, 1] = dy
                     m += 1
@@ -260,16 +260,7 @@ def _indicator_kernel(x, indptr, indices, cutoff):
             j = indices[p]
             if j == i:
                 continue
-            d0 = x[j, 0] - x[i, 0]
-            rr = d0 * d0
-            d1 = 0.0
-            d2 = 0.0
-            if dim > 1:
-                d1 = x[j, 1] - x[i, 1]
-                rr += d1 * d1
-            if dim > 2:
-                d2 = x[j, 2] - x[i, 2]
-                rr += d2 * d2
+            d0, d1, d2, rr = pair_offset(x, i, j)   # x_ji = x_j − x_i
             if rr >= c2:
                 continue
             r = math.sqrt(rr)

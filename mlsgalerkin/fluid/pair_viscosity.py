@@ -62,6 +62,7 @@ from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.fluid.time_step import pair_viscosity_limit
 from mlsgalerkin.kernels import Kernel, get_kernel, kernel_f_df
 from mlsgalerkin.neighbors import NeighborTable, as_coordinates
+from mlsgalerkin.pairs import pair_offset
 
 __all__ = [
     "MonaghanViscosity",
@@ -164,19 +165,12 @@ def _monaghan_kernel(
             j = indices[p]
             if j == i:
                 continue
-            dx = x[i, 0] - x[j, 0]
-            dvx = v[i, 0] - v[j, 0]
-            r2 = dx * dx
-            vx = dvx * dx
-            dy = 0.0
-            dz = 0.0
+            dx, dy, dz, r2 = pair_offset(x, i, j)   # x_ji; x_ij is its negation (exact)
+            dx, dy, dz = -dx, -dy, -dz
+            vx = (v[i, 0] - v[j, 0]) * dx
             if dim > 1:
-                dy = x[i, 1] - x[j, 1]
-                r2 += dy * dy
                 vx += (v[i, 1] - v[j, 1]) * dy
             if dim > 2:
-                dz = x[i, 2] - x[j, 2]
-                r2 += dz * dz
                 vx += (v[i, 2] - v[j, 2]) * dz
             if r2 <= 0.0:
                 continue

@@ -30,6 +30,8 @@ import numpy as np
 from numba import prange
 from numpy.typing import NDArray
 
+from mlsgalerkin.pairs import pair_offset
+
 __all__ = ["PENETRATION_WARNING", "penetration_depths", "penetration_depths_reference", "surface_offsets"]
 
 #: Depth (in spacings) beyond which a penetration is warned about: past the first wall layer.
@@ -71,12 +73,12 @@ def _depths(indptr, indices, x, n_fluid, normals, offsets, out):
             if j < n_fluid:
                 continue
             w = j - n_fluid
-            r2 = 0.0
-            dot = 0.0
-            for a in range(dim):
-                d = x[i, a] - x[j, a]
-                r2 += d * d
-                dot += d * normals[w, a]
+            d0, d1, d2, r2 = pair_offset(x, i, j)   # x_ji; x_ij = −x_ji (exact), so x_ij · n = −x_ji · n
+            dot = -(d0 * normals[w, 0])
+            if dim > 1:
+                dot -= d1 * normals[w, 1]
+            if dim > 2:
+                dot -= d2 * normals[w, 2]
             if r2 < best:
                 best = r2
                 depth = offsets[w] - dot

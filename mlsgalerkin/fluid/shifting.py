@@ -79,6 +79,7 @@ from mlsgalerkin.fluid.corrected_gradient import (
 from mlsgalerkin.fluid.effect import Effect, EffectContext, check_positive
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.kernels import get_kernel, kernel_f_df
+from mlsgalerkin.pairs import pair_offset
 
 __all__ = ["ParticleShifting", "shift_vectors", "shift_vectors_reference"]
 
@@ -95,10 +96,7 @@ def _shift(x, volume, h, indptr, indices, n_fluid, kid, support, norm_d, w_dx_f,
             j = indices[q]
             if j == i:
                 continue
-            d0 = x[j, 0] - x[i, 0]
-            d1 = x[j, 1] - x[i, 1]
-            d2 = x[j, 2] - x[i, 2] if dim == 3 else 0.0
-            r2 = d0 * d0 + d1 * d1 + d2 * d2
+            d0, d1, d2, r2 = pair_offset(x, i, j)   # x_ji = x_j − x_i
             if r2 <= 0.0:
                 continue
             hij = 0.5 * (h[i] + h[j])

@@ -40,6 +40,7 @@ from mlsgalerkin.fluid.bodies import WallBody
 from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.kernels import get_kernel, kernel_f_df
+from mlsgalerkin.pairs import pair_offset
 
 __all__ = ["SLIP_MODES", "Walls", "extrapolate_wall_state", "extrapolate_wall_state_reference"]
 
@@ -65,10 +66,7 @@ def _extrapolate(
             f = indices[q]
             if not is_fluid[f]:
                 continue
-            r2 = 0.0
-            for a in range(dim):
-                d = x[w, a] - x[f, a]
-                r2 += d * d
+            _, _, _, r2 = pair_offset(x, w, f)
             wgt, _ = kernel_f_df(kid, np.sqrt(r2) / h[f], support, dim)
             if wgt <= 0.0:
                 continue

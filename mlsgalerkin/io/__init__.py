@@ -1,4 +1,4 @@
-"""Files: atomic writes, provenance, VTU/PVD frames, checkpoints, CSV time series, pictures.
+"""Files: atomic writes, provenance, VTU/PVD frames, checkpoints, CSV time series.
 
 =========================================  ==================================================
 :mod:`mlsgalerkin.io.files`                :func:`atomic_output`, :func:`atomic_write`,
@@ -11,20 +11,12 @@
 :mod:`mlsgalerkin.io.checkpoint`           :func:`save_checkpoint`, :func:`load_checkpoint`,
                                            :func:`latest_checkpoint`, :func:`prune_checkpoints`
 :mod:`mlsgalerkin.io.timeseries`           :class:`TimeSeriesWriter`, :func:`read_timeseries`
-:mod:`mlsgalerkin.io.render`               :func:`render_snapshot`, :func:`render_animation`,
-                                           :func:`render_vtu_series` (PNG / GIF, off screen)
-:mod:`mlsgalerkin.io.render_fields`        :class:`FieldStyle`, :func:`register_field`: each
-                                           field's label, unit and colour map
-:mod:`mlsgalerkin.io.render_frames`        labelled pictures of particle frames (matplotlib)
-:mod:`mlsgalerkin.io.render_timeseries`    :func:`render_timeseries`: the time series' panels
-:mod:`mlsgalerkin.io.render_run`           :func:`render_run`, :func:`render_frame`: a run
-                                           directory's pictures; :class:`RenderError`
 =========================================  ==================================================
 
 Every file is written atomically (temporary file in the same directory, then
 ``os.replace``) and nothing is ever pickled. This package imports nothing from the solvers or
-the studies. meshio, pyvista and matplotlib are imported only
-when a function needs them.
+the studies. meshio is imported only when a function needs it. The pictures of a run are in
+:mod:`mlsgalerkin.plots`.
 """
 
 from __future__ import annotations
@@ -51,15 +43,6 @@ from mlsgalerkin.io.files import (
     write_json,
 )
 from mlsgalerkin.io.provenance import command_line, git_commit, provenance
-from mlsgalerkin.io.render import (
-    offscreen_backend,
-    render_animation,
-    render_snapshot,
-    render_vtu_series,
-)
-from mlsgalerkin.io.render_fields import FieldStyle, register_field
-from mlsgalerkin.io.render_run import RenderError, render_frame, render_run
-from mlsgalerkin.io.render_timeseries import render_timeseries
 from mlsgalerkin.io.timeseries import TimeSeriesWriter, read_timeseries
 from mlsgalerkin.io.vtk import PVDSeries, read_pvd, read_vtu, write_multiblock_series, write_vtu
 
@@ -67,9 +50,7 @@ __all__ = [
     "CHECKPOINT_FORMAT",
     "CHECKPOINT_VERSION",
     "CheckpointError",
-    "FieldStyle",
     "PVDSeries",
-    "RenderError",
     "TimeSeriesWriter",
     "atomic_output",
     "atomic_write",
@@ -81,20 +62,12 @@ __all__ = [
     "git_commit",
     "latest_checkpoint",
     "load_checkpoint",
-    "offscreen_backend",
     "provenance",
     "prune_checkpoints",
     "read_json_file",
     "read_pvd",
     "read_timeseries",
     "read_vtu",
-    "register_field",
-    "render_animation",
-    "render_frame",
-    "render_run",
-    "render_snapshot",
-    "render_timeseries",
-    "render_vtu_series",
     "save_checkpoint",
     "to_jsonable",
     "write_csv_rows",
@@ -102,3 +75,24 @@ __all__ = [
     "write_multiblock_series",
     "write_vtu",
 ]
+
+#: Names that moved to :mod:`mlsgalerkin.plots` (still reachable here for one release, with a
+#: DeprecationWarning) and names that were removed with the unused off-screen renderer.
+_MOVED = {"FieldStyle": "fields", "register_field": "fields", "RenderError": "run", "render_frame": "run",
+          "render_run": "run", "render_timeseries": "timeseries"}
+_REMOVED = ("render_snapshot", "render_animation", "render_vtu_series", "offscreen_backend")
+
+
+def __getattr__(name: str):
+    if name in _MOVED:
+        import importlib
+        import warnings
+
+        warnings.warn(f"mlsgalerkin.io.{name} moved to mlsgalerkin.plots.{name}; import it from mlsgalerkin.plots",
+                      DeprecationWarning, stacklevel=2)
+        # by name at run time: io is the layer below the pictures and has no import edge to them
+        return getattr(importlib.import_module(f"mlsgalerkin.plots.{_MOVED[name]}"), name)
+    if name in _REMOVED:
+        raise AttributeError(f"mlsgalerkin.io.{name} was removed (an off-screen renderer nothing used); draw a run's "
+                             "frames with mlsgalerkin.plots.render_run or render_frame")
+    raise AttributeError(f"module 'mlsgalerkin.io' has no attribute {name!r}")

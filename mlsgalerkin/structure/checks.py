@@ -63,16 +63,16 @@ warns once when a linear body's largest element rotation
 
 from __future__ import annotations
 
-import contextlib
 import math
-from collections.abc import Iterator, Sequence
-from contextvars import ContextVar
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 from skfem import ElementHex1, ElementQuad1, ElementTetP1, ElementTriP1
+
+from mlsgalerkin.limits import current_element_limit, element_limit
 
 __all__ = [
     "BYTES_PER_ELEMENT", "INSIDE_FRACTION", "JACOBIAN_TOLERANCE", "KAPPA", "LINEAR_ROTATION_LIMIT",
@@ -105,8 +105,6 @@ INSIDE_FRACTION = 0.1
 #: Largest element rotation (rad) of a linear elastic body before the solver warns.
 LINEAR_ROTATION_LIMIT = 0.1
 
-#: The element limit in the current context (``None``: no limit); see :func:`element_limit`.
-_ELEMENT_LIMIT: ContextVar[int | None] = ContextVar("element_limit", default=None)
 #: The geometric (vertex) element of a mesh by (dimension, vertices per element).
 _GEOMETRY = {(2, 3): ElementTriP1, (2, 4): ElementQuad1, (3, 4): ElementTetP1, (3, 8): ElementHex1}
 
@@ -181,22 +179,10 @@ def explicit_substep_problems(owner: str, young: float, poisson: float, density:
 
 
 # ------------------------------------------------------------------ mesh size
-@contextlib.contextmanager
-def element_limit(n: int | None) -> Iterator[None]:
-    """Within the block, :func:`mesh_size_problems` (and so ``ElasticBody`` and the shipped
-    problems' ``check``) refuses meshes of more than ``n`` elements (``None``: no limit);
-    ``mlsgalerkin run`` sets it from ``--max-elements``."""
-    token = _ELEMENT_LIMIT.set(n)
-    try:
-        yield
-    finally:
-        _ELEMENT_LIMIT.reset(token)
-
-
 def mesh_size_problems(n_elements: float, what: str, limit: int | None = None) -> list[str]:
     """``[message]`` if a mesh of ``n_elements`` elements exceeds ``limit`` (default: the current
     :func:`element_limit`); ``what`` names the mesh."""
-    limit = _ELEMENT_LIMIT.get() if limit is None else limit
+    limit = current_element_limit() if limit is None else limit
     if limit is None or n_elements <= limit:
         return []
     return [f"{what} would have {n_elements:,.0f} elements, above the limit of {limit:,}; use fewer elements, or "

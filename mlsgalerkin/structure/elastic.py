@@ -68,7 +68,7 @@ from threadpoolctl import threadpool_limits
 
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.dynamics import Body
-from mlsgalerkin.structure.checks import element_problems, mesh_size_problems
+from mlsgalerkin.structure.checks import BYTES_PER_ELEMENT, element_problems, mesh_size_problems, substep_estimate
 from mlsgalerkin.structure.material import ElasticMaterial
 
 __all__ = ["ARPACK_SEED", "ELEMENTS", "ELEMENTS_3D", "INTEGRATORS", "MODELS", "STRUCTURE_SOLVER", "ElasticBody",
@@ -338,6 +338,21 @@ class ElasticBody(Body):
     @property
     def n_dofs(self) -> int:
         return self.basis.N
+
+    @property
+    def n_elements(self) -> int:
+        """Elements of the mesh."""
+        return int(self.mesh.t.shape[1])
+
+    def memory_estimate(self) -> float:
+        """Bytes a run of this body holds (stiffness, mass, state), from its element count
+        (:data:`~mlsgalerkin.structure.checks.BYTES_PER_ELEMENT`): for ``mlsgalerkin run --check``."""
+        return float(self.n_elements * BYTES_PER_ELEMENT.get(self.element, 16_000))
+
+    def substep_estimate(self) -> float | None:
+        """The explicit sub-step (s) a run takes, estimated before any assembly
+        (:func:`~mlsgalerkin.structure.checks.substep_estimate`); ``None`` for Newmark."""
+        return substep_estimate(self)
 
     def __repr__(self) -> str:
         m = self.material

@@ -62,6 +62,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.dynamics import Body
+from mlsgalerkin.structure.checks import substep_estimate
 from mlsgalerkin.structure.elastic import STRUCTURE_SOLVER
 
 __all__ = ["CONSTRAINTS", "Hinge", "RigidBody"]
@@ -244,6 +245,11 @@ class RigidBody(Body):
     @property
     def dim(self) -> int:
         return self.surface.dim
+
+    def substep_estimate(self) -> float | None:
+        """The sub-step (s) a run takes for a hinge spring or a spin, ``None`` where the outer
+        step is enough (:func:`~mlsgalerkin.structure.checks.substep_estimate`)."""
+        return substep_estimate(self)
 
     @property
     def free_rotation(self) -> bool:
