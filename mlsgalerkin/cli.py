@@ -75,6 +75,10 @@ def _parse_sets(items: list[str]) -> dict[str, str]:
     return out
 
 
+#: Width of a problem's description in ``mlsgalerkin problems`` (its table is 100 wide, indented by 4).
+_DESCRIPTION_WIDTH = 96
+
+
 def _cmd_problems(args: argparse.Namespace) -> int:
     import textwrap
 
@@ -93,8 +97,12 @@ def _cmd_problems(args: argparse.Namespace) -> int:
         print(f"error: {err}", file=sys.stderr)
         return 2
     for k, (name, mod) in enumerate(chosen):
-        print(("\n" if k else "") + textwrap.fill(f"{name}: {problem_description(mod)}", 100,
-                                                  subsequent_indent="    "))
+        # The description wraps at a fixed width of its own, so where the lines break does not depend
+        # on the name (a problem file's path is as long as the directory it lives in).
+        first, *rest = textwrap.wrap(problem_description(mod), _DESCRIPTION_WIDTH) or [""]
+        print(("\n" if k else "") + f"{name}: {first}".rstrip())
+        for line in rest:
+            print(f"    {line}")
         print(textwrap.indent(parameter_table(mod.Parameters, width=96), "    "))
     if args.problem:
         copy = " (copy it to start your own case)" if args.problem in shipped_problems() else ""
