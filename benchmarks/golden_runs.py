@@ -37,7 +37,9 @@ def fingerprint(run_dir: Path) -> dict[str, str]:
         h = hashlib.sha256()
         with np.load(checkpoints[-1]) as data:
             for key in sorted(data.files):
-                if key.startswith("meta"):
+                if key.startswith("__meta"):  # metadata: wall-clock times, commit, paths
+                    continue
+                if key == "run__clock":  # the run's clock (t, dt, step), a copy of the metadata's, not state
                     continue
                 h.update(key.encode())
                 h.update(np.ascontiguousarray(data[key]).tobytes())

@@ -138,6 +138,25 @@ def _positive_count(text: str) -> int:
     return int(value)
 
 
+#: ``mlsgalerkin run`` flags that set a problem parameter, and the parameter they set.
+_FLAG_PARAMETERS = {"--dx": ("dx", "dx"), "--t-end": ("t_end", "t_end"), "--frame-every": ("frame_every", "frame_every"),
+                    "--no-gif": ("no_gif", "gif")}
+
+
+def _refuse_conflicting_flags(args: argparse.Namespace, overrides: dict[str, str]) -> None:
+    """A ValueError for flags that contradict each other, before any work: ``--restart`` with
+    ``--overwrite``, ``--allow-changes`` without ``--restart``, and a parameter given both by its
+    own flag and by ``--set`` (``--dx 0.01 --set dx=0.02``: which one was meant?)."""
+    if args.restart and args.overwrite:
+        raise ValueError("--restart continues the run in --out and --overwrite deletes it: give one of them")
+    if args.allow_changes and not args.restart:
+        raise ValueError("--allow-changes applies to --restart only: add --restart, or drop --allow-changes")
+    for flag, (attr, name) in _FLAG_PARAMETERS.items():
+        given = getattr(args, attr)
+        if name in overrides and given not in (None, False):
+            raise ValueError(f"{name} is given twice, by {flag} and by --set {name}={overrides[name]}; give it once")
+
+
 #: Exit codes of ``mlsgalerkin run``.
 EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_WRITE_FAILED = 2, 3, 4
 
@@ -166,6 +185,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         output.update(gif=False, png=False)
     try:
         overrides = _parse_sets(args.set or [])
+        _refuse_conflicting_flags(args, overrides)
         if args.dx is not None:
             overrides["dx"] = args.dx
         if args.t_end is not None:
