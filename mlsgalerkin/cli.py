@@ -40,9 +40,20 @@ def _run_study(run, args: argparse.Namespace) -> int:
     try:
         result = run(out=args.out, quick=args.quick, scheduler=args.scheduler,
                      progress=not args.no_progress)
-    except (SchedulerError, GridError, MeasurementError) as err:
+    except (SchedulerError, GridError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    except MeasurementError as err:
+        where, _, worker_traceback = str(err).partition("\n--- traceback on the worker ---\n")
+        print(f"error: {where}" + (" (run with -v for the worker's traceback)" if worker_traceback and not args.verbose
+                                   else ""), file=sys.stderr)
+        if worker_traceback and args.verbose:
+            print(worker_traceback, file=sys.stderr, end="")
+        return 3
+    except OSError as err:
+        print(f"error: the study could not write its files in {args.out}: {_os_error_text(err)}. Choose a "
+              "writable directory with --out", file=sys.stderr)
+        return 4
     print(result.report())
     print("full report (summary.md, all figures): python verification/"
           f"{args.report_script} --out DIR (in a clone of the repository)")
@@ -258,6 +269,10 @@ def _cmd_render(args: argparse.Namespace) -> int:
     except (RenderError, ValueError, FileNotFoundError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    except OSError as err:
+        print(f"error: the pictures could not be written to {args.out or args.run_dir}: {_os_error_text(err)}. "
+              "Choose a writable directory with --out", file=sys.stderr)
+        return 4
     state = contents.status or "no summary.json: unfinished or interrupted"
     print(f"{contents.title} ({state}): {len(contents.frames)} frames"
           + (f", coloured by {args.color_by}" if frames_wanted else ""))
@@ -358,14 +373,56 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _os_error_text(err: OSError) -> str:
+    """``[Errno 28] No space left on device: 'PATH'`` as ``No space left on device (PATH)``."""
+    if err.strerror and err.filename:
+        return f"{err.strerror} ({err.filename})"
+    return err.strerror or str(err)
+
+
+#: Exit code of a command whose output pipe was closed (``mlsgalerkin problems | head``): 128 + SIGPIPE.
+EXIT_BROKEN_PIPE = 141
+#: Exit code of an unexpected error (a bug, or a case no message was written for).
+EXIT_UNEXPECTED = 1
+
+
+def _quiet_stdout() -> None:
+    """Point stdout at /dev/null, so that flushing it at exit raises no second BrokenPipeError."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # no real file descriptor (e.g. captured by a test)
+        pass
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run one command; every failure ends in one line on stderr and a nonzero exit code (``-v``
+    shows the traceback of an unexpected error). A closed output pipe ends quietly."""
     parser = build_parser()
     args = parser.parse_args(argv)
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,
         format="%(levelname)s %(name)s: %(message)s",
     )
-    return int(args.func(args) or 0)
+    try:
+        code = int(args.func(args) or 0)
+        sys.stdout.flush()
+        return code
+    except BrokenPipeError:
+        _quiet_stdout()
+        return EXIT_BROKEN_PIPE
+    except KeyboardInterrupt:
+        print("\ninterrupted", file=sys.stderr)
+        return 130
+    except Exception as err:
+        if args.verbose:
+            raise
+        first = (str(err).strip().splitlines() or [""])[0]
+        print(f"error: {type(err).__name__}: {first} (unexpected; run with -v to see where, and please report it)",
+              file=sys.stderr)
+        return EXIT_UNEXPECTED
 
 
 if __name__ == "__main__":
