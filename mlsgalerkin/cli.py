@@ -168,6 +168,39 @@ def _refuse_conflicting_flags(args: argparse.Namespace, overrides: dict[str, str
             raise ValueError(f"{name} is given twice, by {flag} and by --set {name}={overrides[name]}; give it once")
 
 
+#: What ``mlsgalerkin run`` says before the first step when numba has no compiled kernels on disk yet.
+COMPILING_NOTE = "compiling numba kernels (first run only, about a minute)…"
+
+
+def numba_cache_is_cold() -> bool:
+    """Whether numba has no compiled mlsgalerkin kernel on disk, so the first step compiles them all.
+
+    numba writes an index file ``*.nbi`` per cached function into ``__pycache__`` beside the
+    source, or under ``NUMBA_CACHE_DIR``, or (when the package folder is not writable) into the
+    user's numba cache folder; none of them holding an index file for mlsgalerkin means cold.
+    """
+    import os
+    from pathlib import Path
+
+    import mlsgalerkin
+
+    package = Path(mlsgalerkin.__file__).resolve().parent
+    roots = [package]
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        roots = [Path(os.environ["NUMBA_CACHE_DIR"])]
+    else:
+        try:
+            from numba.misc import appdirs
+
+            roots.append(Path(appdirs.user_cache_dir("numba", appauthor=False)))
+        except Exception:  # numba's layout changed: look beside the sources only
+            pass
+    for root in roots:
+        if root.is_dir() and any("mlsgalerkin" in str(p) or root == package for p in root.rglob("*.nbi")):
+            return False
+    return True
+
+
 #: Exit codes of ``mlsgalerkin run``.
 EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_WRITE_FAILED = 2, 3, 4
 
@@ -215,6 +248,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
             return 0
         analyse = getattr(module, "analyse", None)
         params = prepared.params
+        if numba_cache_is_cold():
+            print(COMPILING_NOTE, flush=True)
         result = Simulation(prepared.scene).run(
             out=out, progress=not args.no_progress, restart="latest" if args.restart else None,
             overwrite=args.overwrite, allow_changes=args.allow_changes, origin=prepared.origin,
