@@ -150,8 +150,8 @@ def _positive_count(text: str) -> int:
 
 
 #: ``mlsgalerkin run`` flags that set a problem parameter, and the parameter they set.
-_FLAG_PARAMETERS = {"--dx": ("dx", "dx"), "--t-end": ("t_end", "t_end"), "--frame-every": ("frame_every", "frame_every"),
-                    "--no-gif": ("no_gif", "gif")}
+_FLAG_PARAMETERS = {"--dx": ("dx", "dx"), "--t-end": ("t_end", "t_end"),
+                    "--frame-every": ("frame_every", "frame_every"), "--no-gif": ("no_gif", "gif")}
 
 
 def _refuse_conflicting_flags(args: argparse.Namespace, overrides: dict[str, str]) -> None:

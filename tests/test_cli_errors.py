@@ -48,6 +48,32 @@ def test_render_into_a_read_only_folder_is_one_line(run_dir, tmp_path, capsys):
     assert "Permission denied" in _one_line_error(capsys.readouterr().err)
 
 
+@pytest.fixture
+def read_only(tmp_path, monkeypatch):
+    """A folder in which nothing can be created, also for root (who ignores the mode bits): making a
+    directory in it fails as in a read-only folder."""
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    real_mkdir = Path.mkdir
+
+    def mkdir(self, *args, **kwargs):
+        if str(self).startswith(str(locked) + os.sep):
+            raise PermissionError(errno.EACCES, "Permission denied", str(self))
+        return real_mkdir(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "mkdir", mkdir)
+    return locked
+
+
+def test_render_and_study_into_a_read_only_place_are_one_line(run_dir, read_only, capsys):
+    capsys.readouterr()
+    assert main(["render", str(run_dir), "--out", str(read_only / "pics"), "--no-gif", "--snapshots", "0"]) == 4
+    assert "Permission denied" in _one_line_error(capsys.readouterr().err)
+    assert main(["study", "kernels", "--quick", "--scheduler", "serial", "--no-progress",
+                 "--out", str(read_only / "study")]) == 4
+    assert "Permission denied" in _one_line_error(capsys.readouterr().err)
+
+
 @pytest.mark.parametrize("study", ["kernels", "galerkin"])
 def test_study_onto_an_existing_file_is_one_line_before_any_work(study, tmp_path, capsys):
     blocker = tmp_path / "results"
