@@ -5,7 +5,8 @@ killed by SIGKILL once each is continued with ``restart="latest"``.
 Kept short: every run takes ``STEPS`` steps (``max_steps``; a problem whose smoke run is shorter
 completes earlier, the same for every run). The second process (the repeat run, then the run it
 kills) is started for all problems at once at the beginning, two at a time, while this process
-makes the straight run, the SIGINT run and both continuations. SIGKILL strikes after the time
+makes the straight run, the SIGINT run and both continuations. Every run uses one numba thread
+(a parallel sum's round-off depends on how the work is split between threads). SIGKILL strikes after the time
 series has recorded a step but before that step's checkpoint is written (a checkpoint follows
 every step), so the continuation starts one step back and must overwrite what the killed run
 wrote after its last checkpoint.
@@ -123,7 +124,7 @@ def _assert_same_run(expected: Path, got: Path, what: str) -> None:
 
 
 @pytest.mark.parametrize("name", PROBLEMS)
-def test_repeat_and_restarts_end_bit_for_bit(name, second_processes, tmp_path):
+def test_repeat_and_restarts_end_bit_for_bit(name, second_processes, tmp_path, one_numba_thread):
     roots, futures = second_processes
     straight = tmp_path / "straight"
     _simulation(name).run(out=straight, progress=False, max_steps=STEPS)
