@@ -166,3 +166,25 @@ def test_a_checkpoint_whose_clock_was_edited_is_refused(finished, edit, named, c
 def test_an_unedited_checkpoint_continues(finished, capsys):
     assert main(CLOCKED + ["--t-end", "0.05", "--out", str(finished), "--restart"]) == 0, capsys.readouterr().err
     assert np.isclose(json.loads((finished / "summary.json").read_text())["t_end_s"], 0.05)
+
+
+def test_under_nohup_sighup_stays_ignored(tmp_path):
+    """``nohup mlsgalerkin run ...`` ignores SIGHUP: the run goes on when the terminal closes."""
+    from mlsgalerkin.monitors import Monitor
+
+    class HangUpAt(Monitor):
+        name = "hang_up_at"
+
+        def handle(self, state, t):
+            if state.step == 5:
+                os.kill(os.getpid(), signal.SIGHUP)
+
+    scene = prepare_problem("hydrostatic", {"dx": 0.05, "t_end": 0.02}).scene
+    scene.monitors = [HangUpAt()]
+    before = signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    try:
+        result = Simulation(scene).run(out=tmp_path, progress=False)
+        assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGHUP, before)
+    assert result.summary["status"] == "completed" and result.state.step > 5
