@@ -45,8 +45,8 @@ from mlsgalerkin.monitors import (
     TimeSeries,
 )
 from mlsgalerkin.run_directory import (
-    RestartMismatch,
     CLOCK_ARRAY,
+    RestartMismatch,
     RunDirectoryError,
     RunDirectoryLock,
     check_checkpoint_clock,
