@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -115,13 +116,19 @@ def test_restart_with_overwrite_is_refused_by_the_python_api(tmp_path):
 
 
 # ------------------------------------------------------------------ a checkpoint's clock
-@pytest.fixture
-def finished(tmp_path, capsys):
+@pytest.fixture(scope="module")
+def finished_once(tmp_path_factory):
     """A hydrostatic run to 0.04 s (49 steps) with checkpoints every 0.004 s."""
-    out = tmp_path / "run"
+    out = tmp_path_factory.mktemp("clocked") / "run"
     assert main(CLOCKED + ["--t-end", "0.04", "--out", str(out)]) == 0
-    capsys.readouterr()
     return out
+
+
+@pytest.fixture
+def finished(finished_once, tmp_path, capsys):
+    """A copy of that run for one test to edit."""
+    capsys.readouterr()
+    return Path(shutil.copytree(finished_once, tmp_path / "run"))
 
 
 def _edit_newest(out: Path, edit) -> Path:
