@@ -50,6 +50,8 @@ def _run_study(run, args: argparse.Namespace) -> int:
         if worker_traceback and args.verbose:
             print(worker_traceback, file=sys.stderr, end="")
         return 3
+    except BrokenPipeError:
+        raise  # the reader of our output went away: main() ends quietly
     except OSError as err:
         print(f"error: the study could not write its files in {args.out}: {_os_error_text(err)}. Choose a "
               "writable directory with --out", file=sys.stderr)
@@ -267,6 +269,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"\n{name}: {err}; its files are written{where}. Continue it with the same command and --restart.",
               file=sys.stderr)
         return 128 + int(err.signum)
+    except BrokenPipeError:
+        raise  # the reader of our output went away: main() ends quietly
     except OSError as err:
         print(f"error: writing the run's files failed: {err}. The files written before are intact; free space "
               "(or fix the directory) and continue with --restart.", file=sys.stderr)
@@ -304,6 +308,8 @@ def _cmd_render(args: argparse.Namespace) -> int:
     except (RenderError, ValueError, FileNotFoundError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        raise  # the reader of our output went away: main() ends quietly
     except OSError as err:
         print(f"error: the pictures could not be written to {args.out or args.run_dir}: {_os_error_text(err)}. "
               "Choose a writable directory with --out", file=sys.stderr)

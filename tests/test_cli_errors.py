@@ -145,3 +145,17 @@ def test_run_into_a_file_is_one_line(tmp_path, capsys):
     blocker.write_text("")
     assert main(["run", "hydrostatic", "--dx", "0.05", "--t-end", "0.02", "--no-progress", "--out", str(blocker)]) == 2
     assert "is a file" in _one_line_error(capsys.readouterr().err)
+
+
+def test_a_run_into_a_closed_pipe_ends_quietly(tmp_path):
+    """A run's console output going nowhere is not a failed write of its files."""
+    read, write = os.pipe()
+    os.close(read)
+    try:
+        done = subprocess.run([sys.executable, "-m", "mlsgalerkin", "run", "hydrostatic", "--dx", "0.05", "--t-end",
+                               "0.01", "--no-progress", "--no-gif", "--out", str(tmp_path / "r")], stdout=write,
+                              stderr=subprocess.PIPE, text=True, timeout=300)
+    finally:
+        os.close(write)
+    assert done.returncode == EXIT_BROKEN_PIPE and "Traceback" not in done.stderr, done.stderr
+    assert "writing the run's files failed" not in done.stderr
