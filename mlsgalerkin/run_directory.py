@@ -261,10 +261,11 @@ def check_checkpoint_clock(path: Path, arrays: dict[str, np.ndarray], meta: dict
     """Refuse a checkpoint whose clock disagrees with itself, before anything is restored.
 
     Checked: ``t`` finite and ``>= 0``, ``step`` a whole number ``>= 0``, ``dt`` finite and
-    ``> 0``; the step in the file name ``checkpoint_{step:08d}.npz``; the binary copy
+    ``> 0`` (``0`` before the first step); the step in the file name ``checkpoint_{step:08d}.npz``; the binary copy
     :data:`CLOCK_ARRAY` ``[t, dt, step]`` (bit for bit; checkpoints written before it existed have
     none); every solver's own ``t`` and ``step``; a solver's particle count ``n`` against the
-    length of its position array ``<solver>__x``; and, given the run's ``timeseries.csv``, a row
+    length of its position array ``<solver>__x``, and the positions' shape against the velocities'
+    ``<solver>__v``; and, given the run's ``timeseries.csv``, a row
     recorded at the checkpoint's step has its time, rows before it earlier times and rows after
     it later ones. Raises :class:`~mlsgalerkin.io.CheckpointError` naming what disagrees.
     """
@@ -285,7 +286,8 @@ def _clock_problems(path: Path, arrays: dict[str, np.ndarray], meta: dict[str, A
         problems.append(f"its time t = {t!r} is not a finite number >= 0")
     if not (isinstance(step, int) and not isinstance(step, bool) and step >= 0):
         problems.append(f"its step {step!r} is not a whole number >= 0")
-    if not (isinstance(dt, (int, float)) and not isinstance(dt, bool) and math.isfinite(dt) and dt > 0):
+    if not (isinstance(dt, (int, float)) and not isinstance(dt, bool) and math.isfinite(dt)
+            and (dt > 0 or (dt == 0 and step == 0))):
         problems.append(f"its step size dt = {dt!r} is not a finite number > 0")
     if problems:
         return problems
@@ -306,10 +308,12 @@ def _clock_problems(path: Path, arrays: dict[str, np.ndarray], meta: dict[str, A
             problems.append(f"the run is at t = {t!r} but its {key} solver at t = {solver['t']!r}")
         if "step" in solver and solver["step"] != step:
             problems.append(f"the run is at step {step} but its {key} solver at step {solver['step']}")
-        x = arrays.get(f"{key}__x")
+        x, v = arrays.get(f"{key}__x"), arrays.get(f"{key}__v")
         if "n" in solver and x is not None and np.ndim(x) >= 1 and np.shape(x)[0] != solver["n"]:
             problems.append(f"its {key} metadata counts {solver['n']} particles but its positions hold "
                             f"{np.shape(x)[0]}")
+        if x is not None and v is not None and np.shape(x) != np.shape(v):
+            problems.append(f"its {key} positions have the shape {np.shape(x)} but its velocities {np.shape(v)}")
     return problems
 
 

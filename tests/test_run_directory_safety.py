@@ -155,7 +155,8 @@ def _shift(d: dict, key: str, by):
     (lambda a, m: m.update(t=float("nan")), "is not a finite number >= 0"),
     (lambda a, m: m.update(step=-3), "is not a whole number >= 0"),
     (lambda a, m: m["solvers"]["fluid"].update(n=m["solvers"]["fluid"]["n"] + 1), "particles but its positions hold"),
-], ids=["t", "t-no-clock", "t-everywhere", "step", "nan-t", "negative-step", "size"])
+    (lambda a, m: a.update(fluid__v=a["fluid__v"][:-1]), "but its velocities"),
+], ids=["t", "t-no-clock", "t-everywhere", "step", "nan-t", "negative-step", "size", "shapes"])
 def test_a_checkpoint_whose_clock_was_edited_is_refused(finished, edit, named, capsys):
     paused = finished
     path = _edit_newest(paused, edit)
@@ -195,3 +196,13 @@ def test_under_nohup_sighup_stays_ignored(tmp_path):
     finally:
         signal.signal(signal.SIGHUP, before)
     assert result.summary["status"] == "completed" and result.state.step > 5
+
+
+def test_a_checkpoint_before_the_first_step_continues(tmp_path):
+    """A run paused before its first step (``max_steps=0``) has the clock ``t = 0, dt = 0``: valid."""
+    scene = prepare_problem("hydrostatic", {"dx": 0.05, "t_end": 0.01}).scene
+    Simulation(scene).run(out=tmp_path, progress=False, max_steps=0)
+    assert load_checkpoint(checkpoints_newest_first(tmp_path / "checkpoints")[0])[1]["step"] == 0
+    scene = prepare_problem("hydrostatic", {"dx": 0.05, "t_end": 0.01}).scene
+    result = Simulation(scene).run(out=tmp_path, progress=False, restart="latest")
+    assert result.summary["status"] == "completed"
