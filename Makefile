@@ -24,6 +24,7 @@ verify: $(STAMP)
 	OPENBLAS_NUM_THREADS=1 $(PY) verification/galerkin_convergence.py --out verification/results/galerkin_convergence
 	$(PY) verification/fluid_validation.py --out verification/results/fluid_validation
 	$(PY) verification/fluid_core.py --section all --out verification/results/fluid_core
+	$(PY) verification/structure_validation.py --section all --out verification/results/structure
 
 bench: $(STAMP)
 	$(PY) benchmarks/run_all.py

@@ -39,6 +39,8 @@ def fingerprint(run_dir: Path) -> dict[str, str]:
             for key in sorted(data.files):
                 if key.startswith("__meta"):  # metadata: wall-clock times, commit, paths
                     continue
+                if key == "run__clock":  # the run's clock (t, dt, step), a copy of the metadata's, not state
+                    continue
                 h.update(key.encode())
                 h.update(np.ascontiguousarray(data[key]).tobytes())
         out["checkpoint"] = h.hexdigest()

@@ -40,9 +40,22 @@ def _run_study(run, args: argparse.Namespace) -> int:
     try:
         result = run(out=args.out, quick=args.quick, scheduler=args.scheduler,
                      progress=not args.no_progress)
-    except (SchedulerError, GridError, MeasurementError) as err:
+    except (SchedulerError, GridError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    except MeasurementError as err:
+        where, _, worker_traceback = str(err).partition("\n--- traceback on the worker ---\n")
+        print(f"error: {where}" + (" (run with -v for the worker's traceback)" if worker_traceback and not args.verbose
+                                   else ""), file=sys.stderr)
+        if worker_traceback and args.verbose:
+            print(worker_traceback, file=sys.stderr, end="")
+        return 3
+    except BrokenPipeError:
+        raise  # the reader of our output went away: main() ends quietly
+    except OSError as err:
+        print(f"error: the study could not write its files in {args.out}: {_os_error_text(err)}. Choose a "
+              "writable directory with --out", file=sys.stderr)
+        return 4
     print(result.report())
     print("full report (summary.md, all figures): python verification/"
           f"{args.report_script} --out DIR (in a clone of the repository)")
@@ -75,6 +88,10 @@ def _parse_sets(items: list[str]) -> dict[str, str]:
     return out
 
 
+#: Width of a problem's description in ``mlsgalerkin problems`` (its table is 100 wide, indented by 4).
+_DESCRIPTION_WIDTH = 96
+
+
 def _cmd_problems(args: argparse.Namespace) -> int:
     import textwrap
 
@@ -93,8 +110,12 @@ def _cmd_problems(args: argparse.Namespace) -> int:
         print(f"error: {err}", file=sys.stderr)
         return 2
     for k, (name, mod) in enumerate(chosen):
-        print(("\n" if k else "") + textwrap.fill(f"{name}: {problem_description(mod)}", 100,
-                                                  subsequent_indent="    "))
+        # The description wraps at a fixed width of its own, so where the lines break does not depend
+        # on the name (a problem file's path is as long as the directory it lives in).
+        first, *rest = textwrap.wrap(problem_description(mod), _DESCRIPTION_WIDTH) or [""]
+        print(("\n" if k else "") + f"{name}: {first}".rstrip())
+        for line in rest:
+            print(f"    {line}")
         print(textwrap.indent(parameter_table(mod.Parameters, width=96), "    "))
     if args.problem:
         copy = " (copy it to start your own case)" if args.problem in shipped_problems() else ""
@@ -130,6 +151,58 @@ def _positive_count(text: str) -> int:
     return int(value)
 
 
+#: ``mlsgalerkin run`` flags that set a problem parameter, and the parameter they set.
+_FLAG_PARAMETERS = {"--dx": ("dx", "dx"), "--t-end": ("t_end", "t_end"),
+                    "--frame-every": ("frame_every", "frame_every"), "--no-gif": ("no_gif", "gif")}
+
+
+def _refuse_conflicting_flags(args: argparse.Namespace, overrides: dict[str, str]) -> None:
+    """A ValueError for flags that contradict each other, before any work: ``--restart`` with
+    ``--overwrite``, ``--allow-changes`` without ``--restart``, and a parameter given both by its
+    own flag and by ``--set`` (``--dx 0.01 --set dx=0.02``: which one was meant?)."""
+    if args.restart and args.overwrite:
+        raise ValueError("--restart continues the run in --out and --overwrite deletes it: give one of them")
+    if args.allow_changes and not args.restart:
+        raise ValueError("--allow-changes applies to --restart only: add --restart, or drop --allow-changes")
+    for flag, (attr, name) in _FLAG_PARAMETERS.items():
+        given = getattr(args, attr)
+        if name in overrides and given not in (None, False):
+            raise ValueError(f"{name} is given twice, by {flag} and by --set {name}={overrides[name]}; give it once")
+
+
+#: What ``mlsgalerkin run`` says before the first step when numba has no compiled kernels on disk yet.
+COMPILING_NOTE = "compiling numba kernels (first run only, about a minute)…"
+
+
+def numba_cache_is_cold() -> bool:
+    """Whether numba has no compiled mlsgalerkin kernel on disk, so the first step compiles them all.
+
+    numba writes an index file ``*.nbi`` per cached function into ``__pycache__`` beside the
+    source, or under ``NUMBA_CACHE_DIR``, or (when the package folder is not writable) into the
+    user's numba cache folder; none of them holding an index file for mlsgalerkin means cold.
+    """
+    import os
+    from pathlib import Path
+
+    import mlsgalerkin
+
+    package = Path(mlsgalerkin.__file__).resolve().parent
+    roots = [package]
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        roots = [Path(os.environ["NUMBA_CACHE_DIR"])]
+    else:
+        try:
+            from numba.misc import appdirs
+
+            roots.append(Path(appdirs.user_cache_dir("numba", appauthor=False)))
+        except Exception:  # numba's layout changed: look beside the sources only
+            pass
+    for root in roots:
+        if root.is_dir() and any("mlsgalerkin" in str(p) or root == package for p in root.rglob("*.nbi")):
+            return False
+    return True
+
+
 #: Exit codes of ``mlsgalerkin run``.
 EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_WRITE_FAILED = 2, 3, 4
 
@@ -158,6 +231,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         output.update(gif=False, png=False)
     try:
         overrides = _parse_sets(args.set or [])
+        _refuse_conflicting_flags(args, overrides)
         if args.dx is not None:
             overrides["dx"] = args.dx
         if args.t_end is not None:
@@ -177,6 +251,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
             return 0
         analyse = getattr(module, "analyse", None)
         params = prepared.params
+        if numba_cache_is_cold():
+            print(COMPILING_NOTE, flush=True)
         result = Simulation(prepared.scene).run(
             out=out, progress=not args.no_progress, restart="latest" if args.restart else None,
             overwrite=args.overwrite, allow_changes=args.allow_changes, origin=prepared.origin,
@@ -194,6 +270,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"\n{name}: {err}; its files are written{where}. Continue it with the same command and --restart.",
               file=sys.stderr)
         return 128 + int(err.signum)
+    except BrokenPipeError:
+        raise  # the reader of our output went away: main() ends quietly
     except OSError as err:
         print(f"error: writing the run's files failed: {err}. The files written before are intact; free space "
               "(or fix the directory) and continue with --restart.", file=sys.stderr)
@@ -231,6 +309,12 @@ def _cmd_render(args: argparse.Namespace) -> int:
     except (RenderError, ValueError, FileNotFoundError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        raise  # the reader of our output went away: main() ends quietly
+    except OSError as err:
+        print(f"error: the pictures could not be written to {args.out or args.run_dir}: {_os_error_text(err)}. "
+              "Choose a writable directory with --out", file=sys.stderr)
+        return 4
     state = contents.status or "no summary.json: unfinished or interrupted"
     print(f"{contents.title} ({state}): {len(contents.frames)} frames"
           + (f", coloured by {args.color_by}" if frames_wanted else ""))
@@ -333,14 +417,56 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _os_error_text(err: OSError) -> str:
+    """``[Errno 28] No space left on device: 'PATH'`` as ``No space left on device (PATH)``."""
+    if err.strerror and err.filename:
+        return f"{err.strerror} ({err.filename})"
+    return err.strerror or str(err)
+
+
+#: Exit code of a command whose output pipe was closed (``mlsgalerkin problems | head``): 128 + SIGPIPE.
+EXIT_BROKEN_PIPE = 141
+#: Exit code of an unexpected error (a bug, or a case no message was written for).
+EXIT_UNEXPECTED = 1
+
+
+def _quiet_stdout() -> None:
+    """Point stdout at /dev/null, so that flushing it at exit raises no second BrokenPipeError."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # no real file descriptor (e.g. captured by a test)
+        pass
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run one command; every failure ends in one line on stderr and a nonzero exit code (``-v``
+    shows the traceback of an unexpected error). A closed output pipe ends quietly."""
     parser = build_parser()
     args = parser.parse_args(argv)
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,
         format="%(levelname)s %(name)s: %(message)s",
     )
-    return int(args.func(args) or 0)
+    try:
+        code = int(args.func(args) or 0)
+        sys.stdout.flush()
+        return code
+    except BrokenPipeError:
+        _quiet_stdout()
+        return EXIT_BROKEN_PIPE
+    except KeyboardInterrupt:
+        print("\ninterrupted", file=sys.stderr)
+        return 130
+    except Exception as err:
+        if args.verbose:
+            raise
+        first = (str(err).strip().splitlines() or [""])[0]
+        print(f"error: {type(err).__name__}: {first} (unexpected; run with -v to see where, and please report it)",
+              file=sys.stderr)
+        return EXIT_UNEXPECTED
 
 
 if __name__ == "__main__":

@@ -46,8 +46,11 @@ from mlsgalerkin.monitors import (
 )
 from mlsgalerkin.run_state import RunState
 from mlsgalerkin.run_directory import (
+    CLOCK_ARRAY,
     RestartMismatch,
     RunDirectoryError,
+    RunDirectoryLock,
+    check_checkpoint_clock,
     claim_directory,
     identity_differences,
     newest_checkpoint_of_run,
@@ -64,7 +67,7 @@ CHECKPOINT_LAYOUT = 2
 
 
 class RunInterrupted(KeyboardInterrupt):
-    """SIGINT or SIGTERM stopped a run after a complete step; its files and a checkpoint are
+    """SIGINT, SIGTERM or SIGHUP stopped a run after a complete step; its files and a checkpoint are
     written (``checkpoint``), and ``restart="latest"`` continues it."""
 
     def __init__(self, signum: int, t: float, step: int) -> None:
@@ -80,10 +83,16 @@ def _signal_name(signum: int) -> str:
         return f"signal {signum}"
 
 
+#: The signals that stop a run after the step in progress, with its files and a checkpoint written:
+#: Ctrl-C, ``kill``, and the terminal (or SSH connection) closing under it.
+STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
 @contextlib.contextmanager
 def _stop_on_signals():
-    """While active (main thread only), SIGINT and SIGTERM append their number to the yielded
-    list instead of interrupting; a second one of the same kind acts as usual."""
+    """While active (main thread only), :data:`STOP_SIGNALS` (SIGINT, SIGTERM, SIGHUP) append their
+    number to the yielded list instead of interrupting; a second one of the same kind acts as usual.
+    A signal the caller ignores (``nohup`` ignores SIGHUP) stays ignored."""
     stop: list[int] = []
     if threading.current_thread() is not threading.main_thread():
         yield stop
@@ -94,7 +103,9 @@ def _stop_on_signals():
         stop.append(signum)
         signal.signal(signum, previous[signum])  # a second Ctrl-C stops at once
 
-    for sig in (signal.SIGINT, signal.SIGTERM):
+    for sig in STOP_SIGNALS:
+        if signal.getsignal(sig) is signal.SIG_IGN and sig != signal.SIGINT:
+            continue  # nohup: the caller wants the run to go on when the terminal closes
         previous[sig] = signal.getsignal(sig)
         signal.signal(sig, handler)
     try:
@@ -251,6 +262,7 @@ class Simulation:
             a, m = s.checkpoint()
             arrays.update({f"{s.key}__{k}": v for k, v in a.items()})
             meta["solvers"][s.key] = m
+        arrays[CLOCK_ARRAY] = np.array([st.t, st.dt, st.step], dtype=np.float64)  # checked on restart
         return arrays, meta
 
     def restore(self, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> None:
@@ -330,15 +342,25 @@ class Simulation:
         ``origin``: where the scene came from (problem name or file and its hash), part of the
         run's identity.
 
-        SIGINT (Ctrl-C) and SIGTERM stop the run after the step in progress: the files and a
-        checkpoint are written, and :class:`RunInterrupted` is raised; ``restart="latest"``
-        continues to the same end state and time series as a run that never stopped.
+        SIGINT (Ctrl-C), SIGTERM and SIGHUP stop the run after the step in progress: the files and
+        a checkpoint are written, and :class:`RunInterrupted` is raised; ``restart="latest"``
+        continues to the same end state and time series as a run that never stopped. One process
+        at a time writes ``out`` (:class:`~mlsgalerkin.run_directory.RunDirectoryLock`): a second
+        is refused with :class:`~mlsgalerkin.run_directory.RunDirectoryError` naming the first's pid.
 
         BLAS libraries run on one thread for the whole run (restored afterwards): numba's threads
         own the cores, and OpenBLAS worker threads that busy-wait after a call on a large array
         would fight them (above about 10⁴ particles a 2-thread run was slower than a 1-thread one).
         """
-        with threadpool_limits(limits=1, user_api="blas"):
+        if restart is not None and overwrite:
+            raise ValueError("restart and overwrite contradict each other: restart continues the run in the "
+                             "directory, overwrite deletes it; give one (--restart or --overwrite)")
+        lock = RunDirectoryLock(out) if out is not None else contextlib.nullcontext()
+        if out is not None:
+            if Path(out).exists() and not Path(out).is_dir():
+                raise RunDirectoryError(f"the output directory {out} is a file; choose a directory (--out)")
+            Path(out).mkdir(parents=True, exist_ok=True)
+        with lock, threadpool_limits(limits=1, user_api="blas"):
             return self._run(out, progress=progress, restart=restart, max_steps=max_steps, analyse=analyse,
                              overwrite=overwrite, allow_changes=allow_changes, origin=origin)
 
@@ -346,10 +368,6 @@ class Simulation:
              analyse: Callable[[RunResult], dict] | None, overwrite: bool, allow_changes: bool,
              origin: dict | None) -> RunResult:
         out = Path(out) if out is not None else None
-        if out is not None:
-            if out.exists() and not out.is_dir():
-                raise RunDirectoryError(f"the output directory {out} is a file; choose a directory (--out)")
-            out.mkdir(parents=True, exist_ok=True)
         self.identity = self._identity(origin)
         monitors = self.monitors(out, progress)
         saved_monitors: dict = {}
@@ -440,6 +458,7 @@ class Simulation:
         else:
             path = Path(restart)
             arrays, meta = load_checkpoint(path)
+            check_checkpoint_clock(path, arrays, meta, out / "timeseries.csv" if out is not None else None)
         saved = meta.get("identity") or {}
         differences = identity_differences(saved, self.identity)
         if float(meta.get("t", 0.0)) > self.scene.t_end * (1 + 1e-12):

@@ -66,7 +66,7 @@ class SendSignal(Monitor):
             os.kill(os.getpid(), self.signum)
 
 
-@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP], ids=["SIGINT", "SIGTERM", "SIGHUP"])
 def test_a_signal_stops_after_the_step_and_restart_continues_identically(signum, straight, tmp_path):
     scene = _scene()
     scene.monitors = [SendSignal(signum, 97)]

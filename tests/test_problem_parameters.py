@@ -173,6 +173,30 @@ def test_cli_shows_one_problem_with_units_and_meanings(path, capsys):
     assert f"mlsgalerkin run {path} --set PARAMETER=VALUE" in out
 
 
+def test_cli_output_does_not_depend_on_where_the_problem_file_lives(tmp_path, capsys):
+    """The same problem file, copied into a short path and into a long one with spaces, prints the
+    same description and table: only the path itself differs."""
+    import shutil
+
+    src = ROOT / "problems" / "dam_break.py"
+    short = tmp_path / "d.py"
+    deep = tmp_path.joinpath("a folder with spaces", "x" * 60, "and another level of nesting", "dam_break.py")
+    assert len(str(deep)) > 120 and " " in str(deep)
+    deep.parent.mkdir(parents=True)
+    shutil.copyfile(src, short)
+    shutil.copyfile(src, deep)
+    texts = {}
+    for path in (short, deep):
+        assert main(["problems", str(path)]) == 0
+        out = capsys.readouterr().out
+        assert out.startswith(f"{path}: {problem_description(load_problem(path))[:40]}")
+        assert f"\nfile: {path}\n" in out
+        texts[path] = out.replace(str(path), "PATH")
+    assert texts[short] == texts[deep]
+    rows = _table_rows(out)
+    assert list(rows) == [h.name for h in parameter_help(load_problem(deep).Parameters)]
+
+
 def test_cli_lists_every_problem_with_its_table(capsys):
     assert main(["problems"]) == 0
     out = capsys.readouterr().out

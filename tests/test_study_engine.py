@@ -166,6 +166,8 @@ def test_bad_grids_are_refused_before_any_work(grid, match):
     (dict(scheduler=""), SchedulerError, "empty"),
     (dict(scheduler="serial", n_workers=2), SchedulerError, "local cluster only"),
     (dict(n_workers=0), SchedulerError, "n_workers"),
+    (dict(scheduler="garbage"), SchedulerError, "neither 'local', 'serial' nor a Dask scheduler address"),
+    (dict(scheduler="tcp://host-without-port"), SchedulerError, "Dask scheduler address"),
     (dict(warm_up="compile"), TypeError, "warm_up"),
 ])
 def test_bad_options_are_refused_before_any_work(kwargs, error, match):
@@ -310,3 +312,56 @@ def test_observed_order_recovers_an_exact_power_law(order, prefactor, coarse, le
         return
     fit, finest = observed_order(h[::-1], err[::-1])  # input order does not matter
     assert fit == pytest.approx(order, abs=1e-8) and finest == pytest.approx(order, abs=1e-8)
+
+
+# ------------------------------------------------------------------ rows on disk as measured
+def test_rows_are_on_disk_as_they_are_measured_and_kept_when_the_study_fails(tmp_path):
+    """Each point's records reach the row log when the point is measured: a measurement that fails
+    at the fourth point leaves the first three points' rows in the file."""
+    from mlsgalerkin.studies.engine import MeasurementError, read_rows
+
+    log = tmp_path / "rows.jsonl"
+    seen_on_disk = []
+
+    def measure(n):
+        seen_on_disk.append(len(read_rows(log)))
+        if n == 3:
+            raise RuntimeError("the solver diverged")
+        return {"square": n * n, "values": np.arange(n)}  # an array: left out of the log
+
+    with pytest.raises(MeasurementError, match="the solver diverged"):
+        run_study({"n": [0, 1, 2, 3, 4]}, measure, scheduler="serial", progress=False, rows_log=log)
+    assert seen_on_disk == [0, 1, 2, 3]  # every earlier point was on disk before the next started
+    rows = read_rows(log)
+    assert [(r["n"], r["square"]) for r in rows] == [(0, 0), (1, 1), (2, 4)]
+    assert "values" not in rows[0] and {"wall_time_s", "worker"} <= set(rows[0])
+
+
+def test_a_full_disk_stops_the_study_and_keeps_the_rows_written_before(tmp_path, monkeypatch):
+    import errno
+
+    from mlsgalerkin.studies.engine import RowLog, read_rows
+
+    real_append = RowLog.append
+
+    def append(self, index, records):
+        if self.rows >= 2:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real_append(self, index, records)
+
+    monkeypatch.setattr(RowLog, "append", append)
+    log = tmp_path / "rows.jsonl"
+    with pytest.raises(OSError, match="No space left on device.*the 2 rows measured before are in that file"):
+        run_study({"n": [1, 2, 3, 4]}, lambda n: {"twice": 2 * n}, scheduler="serial", progress=False,
+                  rows_log=log)
+    assert [r["twice"] for r in read_rows(log)] == [2, 4]
+
+
+def test_an_unwritable_row_log_is_refused_before_any_work(tmp_path):
+    measure, calls = _counting_measure()
+    blocker = tmp_path / "a_file"
+    blocker.write_text("")
+    with pytest.raises(OSError):
+        run_study({"kernel": ["a"], "spacing": [0.1]}, measure, scheduler="serial", progress=False,
+                  rows_log=blocker / "rows.jsonl")
+    assert calls == []

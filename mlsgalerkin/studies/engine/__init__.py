@@ -24,12 +24,14 @@ Modules, one purpose each:
 ``schedulers``  serial, local Dask cluster, existing Dask cluster
 ``runner``      :func:`run_study`: checks, one task per point, progress, errors
 ``result``      :class:`StudyResult`: records, CSV, power-law fits, work-precision plot
+``rowlog``      :class:`RowLog`: each point's records on disk the moment it is measured
 """
 
 from __future__ import annotations
 
 from mlsgalerkin.studies.engine.grid import RESERVED_COLUMNS, Grid, GridError, as_grid
 from mlsgalerkin.studies.engine.result import FIT_COLUMNS, StudyResult, select, write_records
+from mlsgalerkin.studies.engine.rowlog import RowLog, read_rows
 from mlsgalerkin.studies.engine.runner import MeasurementError, run_study, worker_name
 from mlsgalerkin.studies.engine.schedulers import (
     LOCAL,
@@ -48,6 +50,7 @@ __all__ = [
     "Grid",
     "GridError",
     "MeasurementError",
+    "RowLog",
     "SchedulerError",
     "StudyResult",
     "TimingPolicy",
@@ -55,6 +58,7 @@ __all__ = [
     "available_cores",
     "best_time",
     "numeric_environment",
+    "read_rows",
     "run_study",
     "select",
     "worker_name",

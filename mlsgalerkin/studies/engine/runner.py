@@ -32,6 +32,7 @@ original traceback.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 import os
@@ -42,10 +43,12 @@ import traceback
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from mlsgalerkin.studies.engine.grid import RESERVED_COLUMNS, Grid, as_grid
 from mlsgalerkin.studies.engine.result import StudyResult
+from mlsgalerkin.studies.engine.rowlog import RowLog
 from mlsgalerkin.studies.engine.schedulers import SERIAL, check_scheduler, open_backend
 from mlsgalerkin.studies.engine.timing import TimingPolicy, best_time
 
@@ -174,6 +177,20 @@ def measure_point(measure: Callable[..., Any], index: int, params: dict[str, Any
     return PointOutcome(index, _as_measures(value, index, params, worker), seconds, worker)
 
 
+def _records(outcome: PointOutcome, point: Mapping[str, Any]) -> list[dict[str, Any]]:
+    """The records of one measured point: its parameters, each measure dict, time and worker."""
+    return [{**point, **m, "wall_time_s": outcome.wall_time_s, "worker": outcome.worker}
+            for m in outcome.measures]
+
+
+def _log_point(log: RowLog, outcome: PointOutcome, point: Mapping[str, Any]) -> None:
+    try:
+        log.append(outcome.index, _records(outcome, point))
+    except OSError as exc:
+        raise OSError(exc.errno, f"writing the study's rows to {log.path} failed ({exc.strerror or exc}); the "
+                                 f"{log.rows} rows measured before are in that file") from exc
+
+
 def _warm_up_key(warm_up: Callable[[], Any] | None) -> str:
     """A token equal for equal warm-ups (the same function with the same arguments)."""
     if warm_up is None:
@@ -213,6 +230,7 @@ def run_study(
     numba_threads: int | None = 1,
     progress: bool = True,
     description: str = "study",
+    rows_log: str | Path | None = None,
 ) -> StudyResult:
     """Measure every point of ``grid`` with ``measure`` and return the records.
 
@@ -234,6 +252,11 @@ def run_study(
         machine's load); ``None`` leaves numba alone.
     progress : show a tqdm bar over completed points.
     description : label of the progress bar and the log.
+    rows_log : a file to which every point's records are appended as soon as it is measured
+        (:class:`~mlsgalerkin.studies.engine.rowlog.RowLog`, JSON Lines): a study that stops
+        early (a crash, a full disk) keeps every row measured so far there. Opened before any
+        work, so an unwritable place is an immediate ``OSError``; a failed write stops the study
+        with an ``OSError`` saying how many rows the file holds.
 
     Returns
     -------
@@ -261,22 +284,24 @@ def run_study(
 
     from tqdm.auto import tqdm
 
+    points = list(grid)
     t0 = time.perf_counter()
     outcomes: dict[int, PointOutcome] = {}
-    with open_backend(scheduler, n_workers) as backend:
+    log = RowLog(rows_log) if rows_log is not None else contextlib.nullcontext()
+    with log, open_backend(scheduler, n_workers) as backend:
         logger.info("%s: %d points on %s", description, len(grid), backend.description)
         with tqdm(total=len(grid), desc=description, unit="point", disable=not progress,
                   leave=False) as bar:
             for outcome in backend.run(measure_point, arguments):
                 outcomes[outcome.index] = outcome
+                if isinstance(log, RowLog):
+                    _log_point(log, outcome, points[outcome.index])
                 bar.update(1)
         scheduler_text = backend.description
     elapsed = time.perf_counter() - t0
     records = []
-    for i, point in enumerate(grid):
-        o = outcomes[i]
-        for m in o.measures:
-            records.append({**point, **m, "wall_time_s": o.wall_time_s, "worker": o.worker})
+    for i, point in enumerate(points):
+        records += _records(outcomes[i], point)
     logger.info("%s: %d records in %.1f s", description, len(records), elapsed)
     return StudyResult(records=records, parameters=grid.names, scheduler=scheduler_text,
                        timing=policy, wall_time_s=elapsed)

@@ -13,7 +13,7 @@
 ``"serial"``
     Every point in this process, one after the other (no Dask). Handy for debugging a
     measurement and for tiny grids, where starting worker processes costs more than the work.
-``"tcp://host:port"`` (any other string)
+``"tcp://host:port"`` (or ``host:port``; any other string is refused before any work)
     The address of a running Dask scheduler (``dask scheduler`` plus ``dask worker ADDRESS``
     on the machines of a cluster): the grid fans out to its workers. The workers need
     ``mlsgalerkin`` installed; measurement functions travel to them with cloudpickle.
@@ -146,6 +146,8 @@ def check_scheduler(scheduler: Any, n_workers: int | None) -> None:
         )
     if isinstance(scheduler, str) and not scheduler.strip():
         raise SchedulerError("scheduler is an empty string; use 'local', 'serial' or an address")
+    if isinstance(scheduler, str) and scheduler not in (SERIAL, LOCAL):
+        _check_address(scheduler)
     if n_workers is not None:
         if scheduler not in (None, LOCAL):
             raise SchedulerError(
@@ -154,6 +156,21 @@ def check_scheduler(scheduler: Any, n_workers: int | None) -> None:
             )
         if not isinstance(n_workers, int) or isinstance(n_workers, bool) or n_workers < 1:
             raise SchedulerError(f"n_workers must be an integer >= 1, got {n_workers!r}")
+
+
+def _check_address(address: str) -> None:
+    """:class:`SchedulerError` unless ``address`` reads as a Dask scheduler address
+    (``tcp://host:port``, ``host:port``, ``tls://...``, ``inproc://...``)."""
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    try:
+        scheme, location = parse_address(address)
+        if scheme in ("tcp", "tls", "ws", "wss", "ucx"):
+            parse_host_port(location)
+    except ValueError as exc:
+        raise SchedulerError(
+            f"scheduler {address!r} is neither 'local', 'serial' nor a Dask scheduler address such as "
+            f"'tcp://10.0.0.5:8786' ({exc})") from None
 
 
 @contextmanager
@@ -183,7 +200,7 @@ def open_backend(scheduler: Any = None, n_workers: int | None = None) -> Iterato
         return
     try:
         client = Client(scheduler, timeout=CONNECT_TIMEOUT_S)
-    except (OSError, TimeoutError) as exc:
+    except (OSError, TimeoutError, ValueError) as exc:
         raise SchedulerError(
             f"cannot reach a Dask scheduler at {scheduler!r} within {CONNECT_TIMEOUT_S} s "
             f"({exc}); start one with `dask scheduler` and workers with `dask worker "

@@ -46,6 +46,9 @@ ORDER_COLUMNS = [
     "error_energy_finest", "error_h1_rule_finest", "wall_s_finest",
 ]
 
+#: The rows as they are measured (kept if the study stops early; removed once the table is written).
+ROWS_LOG = "galerkin_convergence.rows.jsonl"
+
 
 def run_galerkin_study(out: str | Path, quick: bool = False, *, scheduler: Any = None,
                        progress: bool = True) -> GalerkinStudyResult:
@@ -73,11 +76,13 @@ def run_galerkin_study(out: str | Path, quick: bool = False, *, scheduler: Any =
         warm_up=functools.partial(warm_up, tuple(warm_up_specs(cfg))),
         numba_threads=cfg.threads,
         progress=progress,
+        rows_log=out / ROWS_LOG,
         description="galerkin study",
     )
     rows = study.records
     orders = fit_orders(rows)
     csv_path = write_records(out / "galerkin_convergence.csv", rows, COLUMNS)
+    (out / ROWS_LOG).unlink(missing_ok=True)  # the table holds every row now
     orders_path = write_records(out / "galerkin_orders.csv", orders, ORDER_COLUMNS)
     kernel = cfg.kernels[0]
     plot = study.work_precision_plot(

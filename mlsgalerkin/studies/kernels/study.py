@@ -25,6 +25,9 @@ __all__ = ["measure_point", "run_kernel_study", "study_grid"]
 
 logger = logging.getLogger(__name__)
 
+#: The rows as they are measured (kept if the study stops early; removed once the table is written).
+ROWS_LOG = "kernel_study.rows.jsonl"
+
 
 def study_grid(cfg: StudyConfig) -> Grid:
     """Every point of the study: the SPH sweeps (part 1), then the shape-function sweeps."""
@@ -82,11 +85,13 @@ def run_kernel_study(
         warm_up=functools.partial(warm_up, cfg),
         numba_threads=cfg.threads,
         progress=progress,
+        rows_log=out / ROWS_LOG,
         description="kernel study",
     )
     rows = study.records
     fits = compute_fits(rows)
     csv_path = write_csv_rows(out / "kernel_study.csv", COLUMNS, csv_cells(rows, COLUMNS))
+    (out / ROWS_LOG).unlink(missing_ok=True)  # the table holds every row now
     fits_path = write_csv_rows(out / "kernel_study_fits.csv", FIT_COLUMNS,
                                csv_cells(fits, FIT_COLUMNS))
     kernel_2d = cfg.kernels_2d[0]
