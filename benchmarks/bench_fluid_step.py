@@ -14,7 +14,8 @@ reported.
 Per size and thread count: a fresh :class:`~mlsgalerkin.simulation.Simulation`,
 ``start()`` and a few warm-up steps (numba loads its disk cache on the first call), then a
 snapshot (``sim.snapshot()``). A *block* is ``restore(*snapshot)`` (not timed) followed by
-``sim.step(sim.time_step())`` a fixed number of times (timed): every repetition performs
+``sim.step(sim.time_step())`` a fixed number of times (timed, on one BLAS thread as a run holds
+it): every repetition performs
 exactly the same steps, neighbour rebuilds included. The time is the best of several blocks
 (default 3). Blocks are a multiple of 20 steps, so each holds the same number of shifting
 passes. Throughput = ``n_total × steps / best block time``.
@@ -54,6 +55,8 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
+
+from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_neighbors import RETRY_BUDGET, OtherLoad, add_flatness  # noqa: E402
@@ -139,10 +142,13 @@ def _time_block(sim, snapshot, steps: int) -> dict:
     builds0 = fluid.neighbor_builds
     fluid.timer.seconds.clear()
     gc.collect()
-    t0 = time.perf_counter()
-    for _ in range(steps):
-        sim.step(sim.time_step())
-    wall = time.perf_counter() - t0
+    # one BLAS thread, as Simulation.run holds it (numba's threads own the cores; OpenBLAS threads
+    # spinning after a call on a large array fought them: at 4e4 particles 2 threads ran slower than 1)
+    with threadpool_limits(limits=1, user_api="blas"):
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            sim.step(sim.time_step())
+        wall = time.perf_counter() - t0
     return {"seconds": wall, "stages": dict(fluid.timer.seconds),
             "builds": fluid.neighbor_builds - builds0, "t_phys": sim.state.t}
 
