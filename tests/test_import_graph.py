@@ -20,18 +20,6 @@ PACKAGE = ROOT / "mlsgalerkin"
 MAPPED = {ROOT / "problems": "mlsgalerkin.problems"}
 
 
-#: Lazy imports that keep a moved public name working for one release (a module ``__getattr__``
-#: that warns and fetches it from its new home). They point up the layers by design, so they
-#: are left out of the cycle checks; each must be lazy (inside a function), and goes with the
-#: old name.
-MOVED_NAMES = {
-    ("mlsgalerkin.contact", "mlsgalerkin.interactions.penalty_contact"),
-    ("mlsgalerkin.contact.interaction", "mlsgalerkin.interactions.penalty_contact"),
-    ("mlsgalerkin.fluid", "mlsgalerkin.interactions.structure_coupling"),
-    ("mlsgalerkin.fluid.coupling", "mlsgalerkin.interactions.structure_coupling"),
-}
-
-
 def module_names() -> dict[str, Path]:
     out = {}
     for path in sorted(PACKAGE.rglob("*.py")):
@@ -48,10 +36,10 @@ def module_names() -> dict[str, Path]:
     return out
 
 
-def import_edges(modules: dict[str, Path], moved: bool = False) -> set[tuple[str, str]]:
-    """``(importer, imported)`` pairs of modules of the package (packages count as modules);
-    without ``moved``, the lazy imports of :data:`MOVED_NAMES` (and the package ``__init__`` they
-    run) are left out."""
+def import_edges(modules: dict[str, Path]) -> set[tuple[str, str]]:
+    """``(importer, imported)`` pairs of modules of the package (packages count as modules).
+    A moved name forwarded by :mod:`mlsgalerkin.deprecation` imports its new home by name when
+    read, not by an import statement, so it is no edge."""
 
     def known_prefix(name: str) -> str | None:
         while name and name not in modules:
@@ -73,8 +61,6 @@ def import_edges(modules: dict[str, Path], moved: bool = False) -> set[tuple[str
                     source = node.module or ""
                 targets = [source] + [f"{source}.{a.name}" for a in node.names]
             else:
-                continue
-            if not moved and any(name == a and t.startswith(b) for a, b in MOVED_NAMES for t in targets):
                 continue
             for target in targets:
                 found = known_prefix(target) if target.startswith("mlsgalerkin") else None
@@ -143,18 +129,15 @@ def test_the_graph_sees_the_known_layers():
     assert ("mlsgalerkin.forms", "mlsgalerkin.basis") in edges
 
 
-def test_imports_kept_for_moved_names_are_lazy_and_still_there():
-    """Each import of :data:`MOVED_NAMES` exists (remove the entry with the old name) and runs
-    only when the old name is read (inside a function), so importing the old package costs
-    nothing and starts no cycle."""
-    modules = module_names()
-    edges = import_edges(modules, moved=True)
-    for a, b in MOVED_NAMES:
-        assert (a, b) in edges, f"{a} no longer imports {b}: drop it from MOVED_NAMES"
-        tree = ast.parse(modules[a].read_text(encoding="utf-8"))
-        top = [n for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom))]
-        assert not any((getattr(n, "module", None) or "").startswith(b) for n in top), f"{a} imports {b} eagerly"
-
+def test_moved_names_are_forwarded_by_the_one_helper():
+    """Every module that forwards moved names does it through :mod:`mlsgalerkin.deprecation` (one
+    way to warn, cache and name the new import), not with a hand-written ``__getattr__``."""
+    bad = []
+    for name, path in module_names().items():
+        text = path.read_text(encoding="utf-8")
+        if name != "mlsgalerkin.deprecation" and "warnings.warn(" in text and "def __getattr__" in text:
+            bad.append(name)
+    assert not bad, f"modules forwarding moved names by hand: {bad}"
 
 def test_no_import_cycle_between_modules():
     found = cycles(import_edges(module_names()))

@@ -29,7 +29,7 @@ def test_old_package_names_warn_and_forward(name):
     # (a test above imported the old module of the same name, which binds it on the package)
     if isinstance(vars(mio).get(name), type(sys)):
         delattr(mio, name)
-    with pytest.warns(DeprecationWarning, match=f"mlsgalerkin.plots.{name}"):
+    with pytest.warns(DeprecationWarning, match=f"write 'from mlsgalerkin.plots import {name}'"):
         value = getattr(mio, name)
     assert value is getattr(plots, name)
 

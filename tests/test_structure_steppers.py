@@ -71,15 +71,18 @@ def test_the_old_integrators_module_still_imports_with_a_warning_naming_the_new_
     import importlib
 
     integrators = importlib.import_module("mlsgalerkin.structure.integrators")
-    with pytest.warns(DeprecationWarning, match=new.replace(".", r"\.")):
-        value = getattr(integrators, old)
     module, _, name = new.rpartition(".")
+    with pytest.warns(DeprecationWarning, match=f"write 'from {module} import {name}'".replace(".", r"\.")):
+        value = getattr(integrators, old)
     assert value is getattr(importlib.import_module(module), name)
 
 
 def test_the_old_elastic_motion_makes_the_stepper_of_the_body_s_method():
     from mlsgalerkin.structure.steppers import CentralDifference, Newmark
 
+    import mlsgalerkin.structure.integrators as integrators
+
+    vars(integrators).pop("ElasticMotion", None)   # read (and kept) by a test above: each old name warns once
     with pytest.warns(DeprecationWarning):
         from mlsgalerkin.structure.integrators import ElasticMotion
     assert type(ElasticMotion(beam_like())) is CentralDifference

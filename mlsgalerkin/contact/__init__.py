@@ -30,9 +30,6 @@ in ``docs/theory/contact.md``.
 [[0.0, 1000.0]]
 """
 
-import warnings
-from typing import Any
-
 from mlsgalerkin.contact.geometry import (
     ClosestPoints,
     closest_points,
@@ -40,6 +37,7 @@ from mlsgalerkin.contact.geometry import (
     facet_normals,
     facet_normals_reference,
 )
+from mlsgalerkin.contact.law import PenaltyLaw
 from mlsgalerkin.contact.penalty import (
     DEFAULT_ALPHA,
     DEFAULT_DAMPING,
@@ -52,9 +50,9 @@ from mlsgalerkin.contact.penalty import (
     rigid_time_step,
     search_margin,
 )
-from mlsgalerkin.contact.law import PenaltyLaw
 from mlsgalerkin.contact.search import candidate_pairs, candidate_pairs_reference
 from mlsgalerkin.contact.surface import ContactSurface
+from mlsgalerkin.deprecation import moved_names
 
 __all__ = [
     "DEFAULT_ALPHA",
@@ -79,14 +77,6 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    """``PenaltyContact``, moved to :mod:`mlsgalerkin.interactions`: read here for one more
-    release, with a ``DeprecationWarning``."""
-    if name == "PenaltyContact":
-        warnings.warn("mlsgalerkin.contact.PenaltyContact has moved: write 'from mlsgalerkin.interactions import "
-                      "PenaltyContact'; the old name goes in the next release", DeprecationWarning, stacklevel=2)
-        from mlsgalerkin.interactions.penalty_contact import PenaltyContact
-
-        globals()[name] = PenaltyContact  # one warning per process (``from ... import`` looks the name up twice)
-        return PenaltyContact
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+#: ``PenaltyContact`` moved to :mod:`mlsgalerkin.interactions`: read here for one more release, with a
+#: ``DeprecationWarning``.
+__getattr__ = moved_names(__name__, {"PenaltyContact": "mlsgalerkin.interactions"})

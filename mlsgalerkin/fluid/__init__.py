@@ -38,9 +38,7 @@ Run a scene with :class:`mlsgalerkin.simulation.Simulation`; ready-made scenes l
 :mod:`mlsgalerkin.problems`.
 """
 
-import warnings
-from typing import Any
-
+from mlsgalerkin.deprecation import moved_names
 from mlsgalerkin.fluid.bodies import (
     FluidBody,
     ParticleLimitError,
@@ -68,13 +66,17 @@ from mlsgalerkin.fluid.filters import DensityFilter
 from mlsgalerkin.fluid.free_surface import FreeSurfaceDetection
 from mlsgalerkin.fluid.gravity import Gravity
 from mlsgalerkin.fluid.integrators import Integrator, KickDriftKick, PredictorCorrector
-from mlsgalerkin.fluid.pair_viscosity import MonaghanViscosity, NumericalViscosityWarning, numerical_viscosity
+from mlsgalerkin.fluid.pair_viscosity import (
+    MonaghanViscosity,
+    NumericalViscosityWarning,
+    numerical_viscosity,
+)
 from mlsgalerkin.fluid.penalty_walls import PenaltyWalls
 from mlsgalerkin.fluid.presets import water
 from mlsgalerkin.fluid.scheme import FluidContext, FluidScheme
 from mlsgalerkin.fluid.shifting import ParticleShifting
-from mlsgalerkin.fluid.stabilisation import SHIFTING_MODES, stabilisation
 from mlsgalerkin.fluid.solver import FluidSolver
+from mlsgalerkin.fluid.stabilisation import SHIFTING_MODES, stabilisation
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.fluid.time_step import (
     acoustic_limit,
@@ -137,14 +139,6 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    """``StructureCoupling``, moved to :mod:`mlsgalerkin.interactions`: read here for one more
-    release, with a ``DeprecationWarning``."""
-    if name == "StructureCoupling":
-        warnings.warn("mlsgalerkin.fluid.StructureCoupling has moved: write 'from mlsgalerkin.interactions import "
-                      "StructureCoupling'; the old name goes in the next release", DeprecationWarning, stacklevel=2)
-        from mlsgalerkin.interactions.structure_coupling import StructureCoupling
-
-        globals()[name] = StructureCoupling  # one warning per process (``from ... import`` looks the name up twice)
-        return StructureCoupling
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+#: ``StructureCoupling`` moved to :mod:`mlsgalerkin.interactions`: read here for one more release, with a
+#: ``DeprecationWarning``.
+__getattr__ = moved_names(__name__, {"StructureCoupling": "mlsgalerkin.interactions"})

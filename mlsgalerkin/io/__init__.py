@@ -21,6 +21,7 @@ the studies. meshio is imported only when a function needs it. The pictures of a
 
 from __future__ import annotations
 
+from mlsgalerkin.deprecation import moved_names
 from mlsgalerkin.io.checkpoint import (
     CHECKPOINT_FORMAT,
     CHECKPOINT_VERSION,
@@ -78,21 +79,13 @@ __all__ = [
 
 #: Names that moved to :mod:`mlsgalerkin.plots` (still reachable here for one release, with a
 #: DeprecationWarning) and names that were removed with the unused off-screen renderer.
-_MOVED = {"FieldStyle": "fields", "register_field": "fields", "RenderError": "run", "render_frame": "run",
-          "render_run": "run", "render_timeseries": "timeseries"}
+_forward = moved_names(__name__, {name: "mlsgalerkin.plots" for name in (
+    "FieldStyle", "register_field", "RenderError", "render_frame", "render_run", "render_timeseries")})
 _REMOVED = ("render_snapshot", "render_animation", "render_vtu_series", "offscreen_backend")
 
 
 def __getattr__(name: str):
-    if name in _MOVED:
-        import importlib
-        import warnings
-
-        warnings.warn(f"mlsgalerkin.io.{name} moved to mlsgalerkin.plots.{name}; import it from mlsgalerkin.plots",
-                      DeprecationWarning, stacklevel=2)
-        # by name at run time: io is the layer below the pictures and has no import edge to them
-        return getattr(importlib.import_module(f"mlsgalerkin.plots.{_MOVED[name]}"), name)
     if name in _REMOVED:
         raise AttributeError(f"mlsgalerkin.io.{name} was removed (an off-screen renderer nothing used); draw a run's "
                              "frames with mlsgalerkin.plots.render_run or render_frame")
-    raise AttributeError(f"module 'mlsgalerkin.io' has no attribute {name!r}")
+    return _forward(name)

@@ -1,17 +1,5 @@
 """Moved to :mod:`mlsgalerkin.plots.fields`; this alias warns and is removed in the next release."""
 
-import importlib
-import warnings
+from mlsgalerkin.deprecation import moved_module
 
-warnings.warn("mlsgalerkin.io.render_fields moved to mlsgalerkin.plots.fields; import it from there",
-              DeprecationWarning, stacklevel=2)
-# imported by name at run time: io is the layer below the pictures and has no import edge to them
-_new = importlib.import_module("mlsgalerkin.plots.fields")
-
-
-def __getattr__(name: str):
-    return getattr(_new, name)
-
-
-def __dir__() -> list[str]:
-    return dir(_new)
+__getattr__, __dir__ = moved_module(__name__, "mlsgalerkin.plots.fields")

@@ -20,32 +20,20 @@ old name                    new name
 
 from __future__ import annotations
 
-import importlib
-import warnings
-from typing import Any
+from mlsgalerkin.deprecation import moved_names
 
 __all__: list[str] = []
 
-#: Old name → (module under mlsgalerkin.structure.steppers, new name).
-_MOVED = {
-    "ElasticMotion": ("", "stepper_for"),
-    "RigidMotion": ("", "stepper_for"),
-    "SUBSTEP_SAFETY": ("central_difference", "SUBSTEP_SAFETY"),
-    "NONLINEAR_ORDER": ("central_difference", "NONLINEAR_ORDER"),
-    "NEWMARK_REUSE": ("newmark", "NEWMARK_REUSE"),
-    "NEWMARK_MARGIN": ("newmark", "NEWMARK_MARGIN"),
-    "RIGID_PHASE_PER_SUBSTEP": ("rigid_motion", "RIGID_PHASE_PER_SUBSTEP"),
-    "FREE_ROTATION_SPLITTING": ("rotation", "FREE_ROTATION_SPLITTING"),
-    "free_rotation": ("rotation", "free_rotation"),
-    "quaternion_matrix": ("rotation", "quaternion_matrix"),
-}
-
-
-def __getattr__(name: str) -> Any:
-    if name not in _MOVED:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    module, new = _MOVED[name]
-    where = "mlsgalerkin.structure.steppers" + (f".{module}" if module else "")
-    warnings.warn(f"mlsgalerkin.structure.integrators.{name} is deprecated; use {where}.{new}",
-                  DeprecationWarning, stacklevel=2)
-    return getattr(importlib.import_module(where), new)
+_STEPPERS = "mlsgalerkin.structure.steppers"
+__getattr__ = moved_names(__name__, {
+    "ElasticMotion": f"{_STEPPERS}:stepper_for",
+    "RigidMotion": f"{_STEPPERS}:stepper_for",
+    "SUBSTEP_SAFETY": f"{_STEPPERS}.central_difference",
+    "NONLINEAR_ORDER": f"{_STEPPERS}.central_difference",
+    "NEWMARK_REUSE": f"{_STEPPERS}.newmark",
+    "NEWMARK_MARGIN": f"{_STEPPERS}.newmark",
+    "RIGID_PHASE_PER_SUBSTEP": f"{_STEPPERS}.rigid_motion",
+    "FREE_ROTATION_SPLITTING": f"{_STEPPERS}.rotation",
+    "free_rotation": f"{_STEPPERS}.rotation",
+    "quaternion_matrix": f"{_STEPPERS}.rotation",
+})
