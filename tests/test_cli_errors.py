@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import errno
 import os
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -119,7 +120,7 @@ def test_problems_into_a_closed_pipe_ends_quietly():
 
 
 def test_problems_into_head_ends_quietly():
-    shell = f"{sys.executable!s} -m mlsgalerkin problems | head -n 2; exit ${{PIPESTATUS[0]}}"
+    shell = f"{shlex.quote(sys.executable)} -m mlsgalerkin problems | head -n 2; exit ${{PIPESTATUS[0]}}"
     done = subprocess.run(["bash", "-c", shell], capture_output=True, text=True, timeout=120)
     assert len(done.stdout.splitlines()) == 2 and done.stderr == "", done.stderr
     assert done.returncode in (0, EXIT_BROKEN_PIPE)

@@ -27,7 +27,7 @@ from mlsgalerkin.structure.checks import (
     node_spacing,
     placement_problems,
 )
-from mlsgalerkin.structure.integrators import ElasticMotion
+from mlsgalerkin.structure.steppers import stepper_for
 from mlsgalerkin.structure.solver import StructureSolver
 
 MESHES = {
@@ -89,7 +89,7 @@ def test_the_shipped_problems_estimate_agrees_with_the_integrator(name, make_bod
     mat = body.material
     h = node_spacing(body.mesh.p, body.mesh.t, quadratic=True)
     estimate = SUBSTEP_FRACTION * explicit_step_estimate(mat.young, mat.poisson, mat.density, h, plane=mat.plane)
-    ratio = estimate / ElasticMotion(body).substep_limit
+    ratio = estimate / stepper_for(body).substep_limit
     assert 0.65 < ratio < 1.35, ratio
 
 
