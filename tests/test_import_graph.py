@@ -219,3 +219,46 @@ def test_solvers_effects_and_interactions_know_no_scene():
     bad = sorted((a, b) for a, b in import_edges(module_names())
                  if a.startswith(below) and b.startswith(run_layer))
     assert not bad, f"solver, effect or interaction modules import the run layer: {bad}"
+
+
+ARCHITECTURE = ROOT / "docs" / "architecture.md"
+#: Top-level modules outside the layer table: the package itself, its ``python -m`` entry, and
+#: the deprecation helper below every layer (it imports nothing of the package).
+OUTSIDE_THE_TABLE = {"mlsgalerkin", "mlsgalerkin.__main__", "mlsgalerkin.deprecation"}
+
+
+def layer_table() -> dict[str, tuple[int, str]]:
+    """Each top-level module named in the layer table of ``docs/architecture.md`` -> (row, layer),
+    rows from the bottom layer up."""
+    import re
+
+    tops = {top_level(m) for m in module_names()}
+    layers: dict[str, tuple[int, str]] = {}
+    rows = 0
+    for line in ARCHITECTURE.read_text(encoding="utf-8").splitlines():
+        m = re.match(r"^\| ([a-z][a-z ]*) \| (.*?) \| (.*) \|$", line)
+        if not m or m.group(1) == "layer":
+            continue
+        for name in re.findall(r"`([a-z_]+)/?`", m.group(2)):
+            full = f"mlsgalerkin.{name}"
+            if full in tops and full not in layers:
+                layers[full] = (rows, m.group(1))
+        rows += 1
+    return layers
+
+
+def test_the_layer_table_of_the_architecture_page_holds():
+    """Every top-level module is in the table of ``docs/architecture.md``, and no import (type-only
+    ones included) goes from a layer to one above it."""
+    layers = layer_table()
+    assert len({k for k, _ in layers.values()}) >= 8, "the architecture page lost its layer table"
+    missing = sorted({top_level(m) for m in module_names()} - set(layers) - OUTSIDE_THE_TABLE)
+    assert not missing, f"modules the layer table of docs/architecture.md does not name: {missing}"
+    edges = {(top_level(a), top_level(b)) for a, b in import_edges(module_names())}
+    upward = sorted(f"{a} ({layers[a][1]}) imports {b} ({layers[b][1]})" for a, b in edges
+                    if a in layers and b in layers and layers[a][0] < layers[b][0])
+    assert not upward, f"imports against the layer table: {upward}"
+
+
+def test_the_deprecation_helper_imports_nothing_of_the_package():
+    assert not [b for a, b in import_edges(module_names()) if a == "mlsgalerkin.deprecation"]
