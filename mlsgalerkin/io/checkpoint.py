@@ -34,7 +34,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from mlsgalerkin.io.files import atomic_output
+from mlsgalerkin.io.files import NOT_SCALAR, atomic_output, json_scalar
 
 __all__ = [
     "CHECKPOINT_FORMAT",
@@ -71,14 +71,9 @@ class CheckpointError(ValueError):
 
 def _jsonable(value: Any, where: str) -> Any:
     """``value`` as plain JSON types (numpy scalars converted); ValueError naming ``where``."""
-    if value is None or isinstance(value, (bool, str)):
-        return value
-    if isinstance(value, np.bool_):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        return float(value)
+    scalar = json_scalar(value)
+    if scalar is not NOT_SCALAR:
+        return scalar
     if isinstance(value, Mapping):
         out = {}
         for k, v in value.items():

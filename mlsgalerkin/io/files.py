@@ -23,7 +23,7 @@ import os
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Iterable, Iterator, Sequence
+from typing import Any, Iterable, Iterator, Sequence
 
 import numpy as np
 
@@ -122,6 +122,24 @@ def write_csv_rows(
     return atomic_write(path, csv_text(header, rows))
 
 
+#: What :func:`json_scalar` returns for a value that is not a JSON scalar.
+NOT_SCALAR = object()
+
+
+def json_scalar(v: Any) -> Any:
+    """``v`` as a plain JSON scalar (``None``, ``str``, ``bool``, ``int``, ``float``; numpy scalars
+    converted, non-finite floats kept), or :data:`NOT_SCALAR` (containers, arrays, objects)."""
+    if v is None or isinstance(v, str):
+        return v
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        return float(v)
+    return NOT_SCALAR
+
+
 def to_jsonable(v):
     """``v`` with numpy scalars/arrays and tuples converted for JSON; non-finite floats become
     ``None`` (JSON has no NaN) and unknown objects their ``repr``."""
@@ -131,16 +149,10 @@ def to_jsonable(v):
         return [to_jsonable(x) for x in v]
     if isinstance(v, np.ndarray):
         return to_jsonable(v.tolist())
-    if isinstance(v, (bool, np.bool_)):
-        return bool(v)
-    if isinstance(v, (int, np.integer)):
-        return int(v)
-    if isinstance(v, (float, np.floating)):
-        v = float(v)
-        return v if math.isfinite(v) else None
-    if isinstance(v, str) or v is None:
-        return v
-    return repr(v)
+    s = json_scalar(v)
+    if s is NOT_SCALAR:
+        return repr(v)
+    return None if isinstance(s, float) and not math.isfinite(s) else s
 
 
 def write_json(path: str | Path, data: dict) -> Path:

@@ -22,25 +22,11 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from mlsgalerkin.io.files import NOT_SCALAR, json_scalar
 
 __all__ = ["RowLog", "read_rows"]
 
 
-def _plain(value: Any) -> Any:
-    """``value`` as a JSON scalar, or ``_SKIP`` when it is not one (arrays, objects)."""
-    if value is None or isinstance(value, (bool, str)):
-        return value
-    if isinstance(value, np.bool_):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        return float(value)
-    return _SKIP
-
-
-_SKIP = object()
 
 
 class RowLog:
@@ -60,7 +46,7 @@ class RowLog:
         """Write the records of grid point ``index`` and flush them to the operating system."""
         lines = []
         for record in records:
-            plain = {k: v for k, v in ((k, _plain(v)) for k, v in record.items()) if v is not _SKIP}
+            plain = {k: v for k, v in ((k, json_scalar(v)) for k, v in record.items()) if v is not NOT_SCALAR}
             lines.append(json.dumps({"index": int(index), "record": plain}, allow_nan=True) + "\n")
         self._file.write("".join(lines))
         self._file.flush()
