@@ -128,3 +128,16 @@ def test_pair_statistics_without_walls_or_pairs():
     nb = find_neighbors(x, x, radius=0.1)
     s = pair_statistics(nb.indptr, nb.indices, x, 2, DX)
     assert s.min_pair_distance_dx == np.inf and s.min_wall_distance_dx == np.inf and s.clumped_pairs == 0
+
+
+@pytest.mark.parametrize("dim", [1, 2, 3])
+def test_occupancy_numba_matches_scipy(dim, rng):
+    from mlsgalerkin.fluid.distribution import occupancy, occupancy_reference
+
+    upper = {1: (0.2,), 2: (0.1, 0.06), 3: (0.05, 0.04, 0.03)}[dim]
+    x = lattice((0.0,) * dim, upper, DX)
+    x = x * 1.2 + rng.uniform(-0.3, 0.3, x.shape) * DX   # gaps of all widths, some closed, some open
+    x = np.vstack([x, x[:1] + 0.3])                       # and a splash
+    grid, _ = occupancy(x, DX)
+    ref = occupancy_reference(x, DX)
+    assert grid.shape == ref.shape and np.array_equal(grid, ref)

@@ -39,6 +39,7 @@ the same extremes as an uninterrupted one.
 from __future__ import annotations
 
 import math
+import time
 import warnings
 from typing import Any
 
@@ -50,6 +51,7 @@ from mlsgalerkin.fluid.state import FluidState
 
 __all__ = [
     "CLUMPED_PAIRS_LIMIT",
+    "DISTRIBUTION_EVERY_STEPS",
     "FALLBACK_MIN_EVALUATIONS",
     "FALLBACK_POINT_SHARE_LIMIT",
     "FluidRunChecks",
@@ -73,6 +75,10 @@ MACH_LIMIT = 0.15
 FALLBACK_POINT_SHARE_LIMIT = 0.01
 #: Force evaluations before the fallback share is judged (the first steps of a run are few).
 FALLBACK_MIN_EVALUATIONS = 100
+#: The volume and pair statistics are evaluated at a time-series row at most every this many
+#: steps (a problem that records a row every step or two would pay them at every step); the
+#: rows in between repeat the last evaluation.
+DISTRIBUTION_EVERY_STEPS = 10
 
 
 class VolumeErrorWarning(UserWarning):
@@ -96,16 +102,32 @@ class FluidRunChecks:
     """The run's volume, distribution, Mach-number and fallback records (module docstring)."""
 
     def __init__(self) -> None:
-        self.volume = {"max_abs_error": 0.0, "time_of_max_s": None, "error_at_start": None, "warned": False}
+        self.volume = {"max_abs_error": 0.0, "time_of_max_s": None, "error_at_start": None, "error_last": None,
+                       "time_of_last_s": None, "warned": False}
         self.pairs = {"min_pair_distance_dx": math.inf, "time_of_min_s": None, "max_clumped_pairs": 0,
                       "time_of_max_clumped_s": None, "min_wall_distance_dx": math.inf, "warned": False}
         self.mach = {"max": 0.0, "time_of_max_s": None, "warned": False}
         self.fallback = {"evaluations": 0, "warned": False}
+        self.last = {"step": None, "columns": {}}   # the last evaluation of the distribution columns
+        self.seconds = 0.0   # wall time spent in the checks (not part of a checkpoint)
 
     # ------------------------------------------------------------------ every row
     def row(self, s: FluidState) -> dict[str, float]:
         """The time-series columns of the current state (geometric volume, volume error, pair
-        statistics, Mach number); updates the run's extremes and warns once past a limit."""
+        statistics: evaluated when :data:`DISTRIBUTION_EVERY_STEPS` steps have passed since the
+        last evaluation, else repeated; the Mach number now); updates the run's extremes and
+        warns once past a limit."""
+        t0 = time.perf_counter()
+        last = self.last
+        if last["step"] is None or s.step - last["step"] >= DISTRIBUTION_EVERY_STEPS or s.step < last["step"]:
+            last["step"], last["columns"] = s.step, self._distribution(s)
+        out = dict(last["columns"])
+        if math.isfinite(s.c0):
+            out["mach"] = self.mach_now(s)
+        self.seconds += time.perf_counter() - t0
+        return out
+
+    def _distribution(self, s: FluidState) -> dict[str, float]:
         f = s.fluid
         out: dict[str, float] = {}
         if s.n_fluid:
@@ -122,25 +144,28 @@ class FluidRunChecks:
             out["clumped_pairs"] = ps.clumped_pairs
             out["min_wall_distance_dx"] = ps.min_wall_distance_dx
             self._record_pairs(s, ps)
-        if math.isfinite(s.c0):
-            out["mach"] = self.mach_now(s)
         return out
 
     def _record_volume(self, s: FluidState, err: float) -> None:
         rec = self.volume
         if rec["error_at_start"] is None:
             rec["error_at_start"] = err
+        rec["error_last"], rec["time_of_last_s"] = err, s.t
         if abs(err) > rec["max_abs_error"]:
             rec["max_abs_error"], rec["time_of_max_s"] = abs(err), s.t
         if abs(err) > VOLUME_ERROR_LIMIT and not rec["warned"]:
             rec["warned"] = True
-            what = "lost" if err < 0 else "gained"
+            if err < 0:
+                what = ("lost", "tighter", "pairing, clumping or a collapsing column",
+                        "more particle shifting or density diffusion, or a finer resolution")
+            else:
+                what = ("gained", "looser", "voids, a spray of isolated particles or a fluid under tension",
+                        "cavitation (TaitPressure(negative_pressure='cavitate')) or particle shifting")
             warnings.warn(
-                f"at t = {s.t:.6g} s the fluid has {what} {abs(err):.2%} of its volume: its geometric volume (the "
+                f"at t = {s.t:.6g} s the fluid has {what[0]} {abs(err):.2%} of its volume: its geometric volume (the "
                 f"closed union of the particles' cells) is {err:+.2%} off the volume Σ M/ρ its masses and densities "
-                f"say (limit {VOLUME_ERROR_LIMIT:.0%}). The particles pack {'tighter' if err < 0 else 'looser'} than "
-                "their density shows (pairing, a collapsing column, or voids). Use more particle shifting or "
-                "density diffusion, or a finer resolution; the columns geometric_volume and volume_error of "
+                f"say (limit {VOLUME_ERROR_LIMIT:.0%}). The particles fill space {what[1]} than their density says "
+                f"({what[2]}). Try {what[3]}; the columns geometric_volume and volume_error of "
                 "timeseries.csv follow it", VolumeErrorWarning, stacklevel=3)
 
     def _record_pairs(self, s: FluidState, ps: Any) -> None:
@@ -174,6 +199,7 @@ class FluidRunChecks:
         """The Mach number of the step and the fallback shares so far (``fallback_steps``
         evaluations with a fallback and ``fallback_points`` fallen-back points, the solver's
         counters); warns once past :data:`MACH_LIMIT` or :data:`FALLBACK_POINT_SHARE_LIMIT`."""
+        t0 = time.perf_counter()
         if math.isfinite(s.c0) and s.c0 > 0:
             ma = self.mach_now(s)
             rec = self.mach
@@ -199,6 +225,7 @@ class FluidRunChecks:
                 "neighbours (a splash, a thin jet, clumping). Raise h_factor or refine; the column fallback_points of "
                 "timeseries.csv and the mls_order frame field show where", ShapeFunctionFallbackWarning,
                 stacklevel=3)
+        self.seconds += time.perf_counter() - t0
 
     def count_evaluation(self) -> None:
         """One more force evaluation (the denominator of the fallback shares)."""
@@ -221,6 +248,8 @@ class FluidRunChecks:
                                           min_wall_distance_dx=fin(self.pairs["min_wall_distance_dx"]),
                                           clump_distance_dx=CLUMP_DISTANCE, clumped_pairs_limit=CLUMPED_PAIRS_LIMIT),
             "mach": dict(self.mach, c0=fin(s.c0), limit=MACH_LIMIT, target=MACH_TARGET),
+            "evaluated_every_steps": DISTRIBUTION_EVERY_STEPS,
+            "time_s": round(self.seconds, 6),
             "shape_function_fallback": dict(self.fallback_shares(fallback_steps, fallback_points, s.n_fluid),
                                             evaluations=self.fallback["evaluations"], warned=self.fallback["warned"],
                                             point_share_limit=FALLBACK_POINT_SHARE_LIMIT),
@@ -228,9 +257,10 @@ class FluidRunChecks:
 
     def state_dict(self) -> dict[str, Any]:
         return {"volume": dict(self.volume), "pairs": dict(self.pairs), "mach": dict(self.mach),
-                "fallback": dict(self.fallback)}
+                "fallback": dict(self.fallback), "last": {"step": self.last["step"],
+                                                          "columns": dict(self.last["columns"])}}
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
-        for key in ("volume", "pairs", "mach", "fallback"):
+        for key in ("volume", "pairs", "mach", "fallback", "last"):
             if key in d:
                 getattr(self, key).update(d[key])

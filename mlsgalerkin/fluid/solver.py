@@ -36,7 +36,13 @@ from mlsgalerkin.fluid.effect import SOLVER_QUANTITIES, STAGES, Effect
 from mlsgalerkin.fluid.geometry import geometry_problems
 from mlsgalerkin.fluid.integrators import make_integrator
 from mlsgalerkin.fluid.penetration import PENETRATION_WARNING, penetration_depths, surface_offsets
-from mlsgalerkin.fluid.run_checks import FluidRunChecks
+from mlsgalerkin.fluid.eos import MachNumberWarning
+from mlsgalerkin.fluid.run_checks import (
+    FluidRunChecks,
+    ParticleClumpingWarning,
+    ShapeFunctionFallbackWarning,
+    VolumeErrorWarning,
+)
 from mlsgalerkin.fluid.mass import (
     consistent_acceleration,
     floor_lumped_mass,
@@ -49,11 +55,14 @@ from mlsgalerkin.io.files import to_jsonable
 from mlsgalerkin.kernels import get_kernel
 from mlsgalerkin.neighbors import find_neighbors
 
-__all__ = ["FluidSolver", "StageTimer", "WallPenetrationWarning", "build_state"]
+__all__ = ["FluidSolver", "MachNumberWarning", "ParticleClumpingWarning", "ShapeFunctionFallbackWarning",
+           "StageTimer", "VolumeErrorWarning", "WallPenetrationWarning", "build_state"]
 
 
 class WallPenetrationWarning(UserWarning):
-    """Fluid particles have crossed the first layer of a wall (see :mod:`mlsgalerkin.fluid.penetration`)."""
+    """Fluid particles have crossed the first layer of a wall (see :mod:`mlsgalerkin.fluid.penetration`).
+    The warnings of the run's other checks (volume, clumping, Mach number, shape-function
+    fallbacks; :mod:`mlsgalerkin.fluid.run_checks`) are imported here beside it."""
 
 logger = logging.getLogger(__name__)
 
