@@ -581,7 +581,8 @@ class FluidSolver(Solver):
             k = int(np.argmax(depth))
             body = next((name for name, sl in s.bodies.items() if sl.start <= k < sl.stop), "?")
             warnings.warn(
-                f"at t = {s.t:.6g} s, {count} fluid particles are inside walls, behind their surfaces, the deepest (particle {k} of "
+                f"at t = {s.t:.6g} s, {count} fluid particles are inside walls, behind their surfaces, the deepest "
+                f"(particle {k} of "
                 f"body {body!r} at {np.round(s.x[k], 6).tolist()}) {deepest:.2f} spacings behind, past the first layer "
                 f"of wall particles (threshold {PENETRATION_WARNING} spacings): the walls are leaking. Refine the "
                 "resolution or lower the time step; the columns wall_penetrations and max_wall_penetration_dx of "
