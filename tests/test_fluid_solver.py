@@ -336,6 +336,9 @@ def _assert_same_run(a, b, dir_a: Path, dir_b: Path) -> None:
         assert np.array_equal(ta[k], tb[k]), k
     assert a.summary["fluid"]["diagnostics"] == b.summary["fluid"]["diagnostics"]
     assert a.summary["fluid"]["effect_reports"] == b.summary["fluid"]["effect_reports"]
+    checks_a, checks_b = dict(a.summary["fluid"]["run_checks"]), dict(b.summary["fluid"]["run_checks"])
+    assert checks_a.pop("time_s") >= 0 and checks_b.pop("time_s") >= 0   # wall time: differs
+    assert checks_a == checks_b
 
 
 RESTART_CASES = [("mls", "kdk"), ("rkpm", "kdk"), ("mls", "predictor_corrector")]

@@ -73,9 +73,10 @@ from mlsgalerkin.fluid.pair_viscosity import (
 )
 from mlsgalerkin.fluid.penalty_walls import PenaltyWalls
 from mlsgalerkin.fluid.presets import water
+from mlsgalerkin.fluid.run_checks import ParticleClumpingWarning, ShapeFunctionFallbackWarning, VolumeErrorWarning
 from mlsgalerkin.fluid.scheme import FluidContext, FluidScheme
 from mlsgalerkin.fluid.shifting import ParticleShifting
-from mlsgalerkin.fluid.solver import FluidSolver
+from mlsgalerkin.fluid.solver import FluidSolver, WallPenetrationWarning
 from mlsgalerkin.fluid.stabilisation import SHIFTING_MODES, stabilisation
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.fluid.time_step import (
@@ -108,14 +109,18 @@ __all__ = [
     "MonaghanViscosity",
     "NewtonianViscosity",
     "NumericalViscosityWarning",
+    "ParticleClumpingWarning",
     "ParticleLimitError",
     "ParticleShifting",
     "PenaltyWalls",
     "Phase",
     "PredictorCorrector",
+    "ShapeFunctionFallbackWarning",
     "TaitEOS",
     "TaitPressure",
+    "VolumeErrorWarning",
     "WallBody",
+    "WallPenetrationWarning",
     "Walls",
     "SHIFTING_MODES",
     "acoustic_limit",

@@ -5,12 +5,22 @@ from it (``wall_box`` builds them so). Each wall particle ``w`` knows its offset
 surface, :math:`o_w = (k_w + \tfrac12)\,\Delta x_w` for layer :math:`k_w` (the number of
 particles of its body in front of it along its normal :math:`\mathbf n_w`, counted once from
 the initial geometry by :func:`surface_offsets`). A fluid particle ``f`` whose nearest wall
-particle (among its neighbours) is ``w`` lies
+particle (among its neighbours) is ``w``, at the offset :math:`\mathbf r = \mathbf x_f - \mathbf x_w`,
+lies
 
-.. math:: \delta_f = o_w - (\mathbf x_f - \mathbf x_w)\cdot\mathbf n_w
+.. math:: \delta_f = o_w - \mathbf r\cdot\mathbf n_w
 
-*behind* the wall surface; :math:`\delta_f > 0` is a penetration. :func:`penetration_depths`
-returns :math:`\max(\delta_f, 0)` per fluid particle (0 without a wall neighbour). The fluid
+*behind* the wall surface; :math:`\delta_f > 0` is a penetration **where the wall is**: only
+when ``f`` lies in the cell of ``w``, not beyond the back of it,
+:math:`\mathbf r\cdot\mathbf n_w \ge -\tfrac12\Delta x`, and not beside it, every world
+component of the tangential offset :math:`\mathbf t = \mathbf r - (\mathbf r\cdot\mathbf n_w)
+\mathbf n_w` within :math:`\tfrac12\Delta x` (:data:`CELL_TOLERANCE` added for rounding). The
+cells of a wall's particles tile the wall, so a particle inside the wall is in the cell of its
+nearest wall particle; water passing over the top of an open tank's end wall (beside the cell
+of the top wall particle) or falling down the wall's outer face (beyond the back of its last
+layer) is not inside the wall, and the half-space test without these bounds counted it as up
+to 5 spacings "behind" the wall. :func:`penetration_depths` returns :math:`\max(\delta_f, 0)`
+per fluid particle (0 without a wall neighbour). The fluid
 solver records after every step the number of penetrating particles and the deepest
 penetration in units of the spacing (time-series columns ``wall_penetrations`` and
 ``max_wall_penetration_dx``; ``summary.json`` keeps the largest over the run) and warns once
@@ -32,10 +42,14 @@ from numpy.typing import NDArray
 
 from mlsgalerkin.pairs import pair_offset
 
-__all__ = ["PENETRATION_WARNING", "penetration_depths", "penetration_depths_reference", "surface_offsets"]
+__all__ = ["CELL_TOLERANCE", "PENETRATION_WARNING", "penetration_depths", "penetration_depths_reference",
+           "surface_offsets"]
 
 #: Depth (in spacings) beyond which a penetration is warned about: past the first wall layer.
 PENETRATION_WARNING = 0.5
+#: Added to the half spacing of a wall particle's cell (in spacings): a particle midway between
+#: two wall particles is in both cells up to rounding.
+CELL_TOLERANCE = 1e-6
 
 
 def surface_offsets(positions: NDArray[np.float64], normals: NDArray[np.float64], spacing: float
@@ -63,7 +77,7 @@ def surface_offsets(positions: NDArray[np.float64], normals: NDArray[np.float64]
 
 
 @numba.njit(parallel=True, cache=True)
-def _depths(indptr, indices, x, n_fluid, normals, offsets, out):
+def _depths(indptr, indices, x, n_fluid, normals, offsets, half, out):
     dim = x.shape[1]
     for i in prange(n_fluid):
         best = np.inf
@@ -82,22 +96,38 @@ def _depths(indptr, indices, x, n_fluid, normals, offsets, out):
             if r2 < best:
                 best = r2
                 depth = offsets[w] - dot
+                if half < np.inf:   # inside the cell of w only: not beyond its back, not beside it
+                    inside = dot >= -half
+                    for a in range(dim):
+                        t = -(d0 if a == 0 else (d1 if a == 1 else d2)) - dot * normals[w, a]
+                        if abs(t) > half:
+                            inside = False
+                    if not inside:
+                        depth = 0.0
         out[i] = depth if depth > 0.0 else 0.0
 
 
 def penetration_depths(indptr: NDArray[np.int64], indices: NDArray[np.int32], x: NDArray[np.float64],
-                       n_fluid: int, normals: NDArray[np.float64], offsets: NDArray[np.float64]) -> NDArray[np.float64]:
+                       n_fluid: int, normals: NDArray[np.float64], offsets: NDArray[np.float64],
+                       spacing: float | None = None) -> NDArray[np.float64]:
     """Depth ``(n_fluid,)`` (m) of each fluid particle behind the surface of its nearest wall
     particle (0 if in front of it, or without a wall neighbour). ``indptr, indices``: the
     neighbour table of all particles (fluid first); ``x (n, d)``; ``normals (n_w, d)`` and
-    ``offsets (n_w,)`` of the wall particles ``n_fluid …``."""
+    ``offsets (n_w,)`` of the wall particles ``n_fluid …``. With the wall's ``spacing`` (m), only
+    a particle inside the cell of its nearest wall particle counts (module docstring); without
+    it, every particle behind the plane of the nearest wall particle's surface."""
     out = np.empty(n_fluid)
-    _depths(indptr, indices, x, n_fluid, normals, offsets, out)
+    _depths(indptr, indices, x, n_fluid, normals, offsets, _half_cell(spacing), out)
     return out
 
 
-def penetration_depths_reference(indptr, indices, x, n_fluid, normals, offsets):
+def _half_cell(spacing: float | None) -> float:
+    return np.inf if spacing is None else (0.5 + CELL_TOLERANCE) * float(spacing)
+
+
+def penetration_depths_reference(indptr, indices, x, n_fluid, normals, offsets, spacing=None):
     """Numpy version of :func:`penetration_depths` (tests)."""
+    half = _half_cell(spacing)
     out = np.zeros(n_fluid)
     for i in range(n_fluid):
         nb = indices[indptr[i]:indptr[i + 1]]
@@ -107,5 +137,9 @@ def penetration_depths_reference(indptr, indices, x, n_fluid, normals, offsets):
         d = x[i] - x[nb]
         k = int(np.argmin(np.einsum("ij,ij->i", d, d)))
         w = nb[k] - n_fluid
-        out[i] = max(offsets[w] - d[k] @ normals[w], 0.0)
+        dot = d[k] @ normals[w]
+        tangential = d[k] - dot * normals[w]
+        if dot < -half or np.any(np.abs(tangential) > half):
+            continue
+        out[i] = max(offsets[w] - dot, 0.0)
     return out

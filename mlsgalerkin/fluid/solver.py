@@ -36,6 +36,13 @@ from mlsgalerkin.fluid.effect import SOLVER_QUANTITIES, STAGES, Effect
 from mlsgalerkin.fluid.geometry import geometry_problems
 from mlsgalerkin.fluid.integrators import make_integrator
 from mlsgalerkin.fluid.penetration import PENETRATION_WARNING, penetration_depths, surface_offsets
+from mlsgalerkin.fluid.eos import MachNumberWarning
+from mlsgalerkin.fluid.run_checks import (
+    FluidRunChecks,
+    ParticleClumpingWarning,
+    ShapeFunctionFallbackWarning,
+    VolumeErrorWarning,
+)
 from mlsgalerkin.fluid.mass import (
     consistent_acceleration,
     floor_lumped_mass,
@@ -48,11 +55,14 @@ from mlsgalerkin.io.files import to_jsonable
 from mlsgalerkin.kernels import get_kernel
 from mlsgalerkin.neighbors import find_neighbors
 
-__all__ = ["FluidSolver", "StageTimer", "WallPenetrationWarning", "build_state"]
+__all__ = ["FluidSolver", "MachNumberWarning", "ParticleClumpingWarning", "ShapeFunctionFallbackWarning",
+           "StageTimer", "VolumeErrorWarning", "WallPenetrationWarning", "build_state"]
 
 
 class WallPenetrationWarning(UserWarning):
-    """Fluid particles have crossed the first layer of a wall (see :mod:`mlsgalerkin.fluid.penetration`)."""
+    """Fluid particles have crossed the first layer of a wall (see :mod:`mlsgalerkin.fluid.penetration`).
+    The warnings of the run's other checks (volume, clumping, Mach number, shape-function
+    fallbacks; :mod:`mlsgalerkin.fluid.run_checks`) are imported here beside it."""
 
 logger = logging.getLogger(__name__)
 
@@ -261,6 +271,8 @@ class FluidSolver(Solver):
         self.mass_floored = 0
         self.neighbor_builds = 0
         self.consistent_mass_unconverged = 0
+        self.checks = FluidRunChecks()   # volume, distribution, Mach number, fallback shares
+        s.run_checks = self.checks
         self._table_volumes: np.ndarray | None = None
         self._div: np.ndarray | None = None
         self._external: np.ndarray | None = None
@@ -382,6 +394,7 @@ class FluidSolver(Solver):
         t0 = time.perf_counter()
         self._shape_functions()
         nf = self._state.fallback_count
+        self.checks.count_evaluation()
         if nf:
             self.fallback_points += nf
             self.fallback_steps += 1
@@ -545,7 +558,9 @@ class FluidSolver(Solver):
             t0 = self.timer.add(e.name, t0)
         if self._offsets is not None:
             self._measure_penetration()
-            self.timer.add("wall_penetration", t0)
+            t0 = self.timer.add("wall_penetration", t0)
+        self.checks.after_step(s, self.fallback_steps, self.fallback_points)
+        self.timer.add("run_checks", t0)
         s.dt_next = self.time_step_limit()
 
     def _measure_penetration(self) -> None:
@@ -553,7 +568,7 @@ class FluidSolver(Solver):
         :data:`~mlsgalerkin.fluid.penetration.PENETRATION_WARNING` spacings."""
         s = self._state
         nb = s.neighbors
-        depth = penetration_depths(nb.indptr, nb.indices, s.x, s.n_fluid, s.wall_normals, self._offsets)
+        depth = penetration_depths(nb.indptr, nb.indices, s.x, s.n_fluid, s.wall_normals, self._offsets, s.spacing)
         deepest = float(depth.max()) / s.spacing if depth.size else 0.0
         count = int(np.count_nonzero(depth > 0.0))
         s.wall_penetrations, s.max_wall_penetration_dx = count, deepest
@@ -566,7 +581,8 @@ class FluidSolver(Solver):
             k = int(np.argmax(depth))
             body = next((name for name, sl in s.bodies.items() if sl.start <= k < sl.stop), "?")
             warnings.warn(
-                f"at t = {s.t:.6g} s, {count} fluid particles are behind wall surfaces, the deepest (particle {k} of "
+                f"at t = {s.t:.6g} s, {count} fluid particles are inside walls, behind their surfaces, the deepest "
+                f"(particle {k} of "
                 f"body {body!r} at {np.round(s.x[k], 6).tolist()}) {deepest:.2f} spacings behind, past the first layer "
                 f"of wall particles (threshold {PENETRATION_WARNING} spacings): the walls are leaking. Refine the "
                 "resolution or lower the time step; the columns wall_penetrations and max_wall_penetration_dx of "
@@ -615,6 +631,7 @@ class FluidSolver(Solver):
             "penetration": dict(self.penetration),
             "wall_penetration_now": [s.wall_penetrations, s.max_wall_penetration_dx],
             "sensors": dict(s.sensors),
+            "run_checks": self.checks.state_dict(),
         }
         return arrays, meta
 
@@ -649,6 +666,7 @@ class FluidSolver(Solver):
         s.wall_penetrations, s.max_wall_penetration_dx = meta.get("wall_penetration_now", [0, 0.0])
         s.sensors.clear()
         s.sensors.update(meta.get("sensors", {}))
+        self.checks.load_state_dict(meta.get("run_checks", {}))
         # wall velocities, accelerations and normals, and the penalty surfaces, of the
         # checkpoint's time (the particle positions are in the checkpoint)
         self._drive = {}
@@ -696,4 +714,5 @@ class FluidSolver(Solver):
             "effect_reports": {e.name: to_jsonable(e.summary()) for e in self.effects if e.summary()},
             "wall_penetration": (dict(self.penetration, threshold_dx=PENETRATION_WARNING)
                                  if self._offsets is not None else None),
+            "run_checks": to_jsonable(self.checks.summary(s, self.fallback_steps, self.fallback_points)),
         }

@@ -115,6 +115,9 @@ class FluidState:
     extra: dict[str, NDArray] = field(default_factory=dict)
     wall_surfaces: dict[str, WallSurfaceState] = field(default_factory=dict)
     sensors: dict[str, float] = field(default_factory=dict)
+    #: The run's volume, distribution and Mach-number checks
+    #: (:class:`~mlsgalerkin.fluid.run_checks.FluidRunChecks`; the solver sets it), ``None`` alone.
+    run_checks: Any = None
 
     def __post_init__(self) -> None:
         n, d = self.x.shape
@@ -178,7 +181,9 @@ class FluidState:
     def observables(self) -> dict[str, float]:
         """The built-in time-series columns: kinetic energy, total mass, potential energy
         (with gravity), momentum, largest speed, density-ratio range, shape-function fallbacks
-        of the last evaluation, wall penetration (when measured), then the :attr:`sensors`."""
+        of the last evaluation, wall penetration (when measured), the :attr:`sensors`, then the
+        columns of the :attr:`run_checks` (geometric volume and volume error, pair distances,
+        clumped pairs, Mach number; :mod:`mlsgalerkin.fluid.run_checks`)."""
         f = self.fluid
         speed2 = np.einsum("ij,ij->i", self.v[f], self.v[f])
         ratio = self.rho[f] / self.rho0[f]
@@ -197,6 +202,8 @@ class FluidState:
             row["wall_penetrations"] = int(self.wall_penetrations)
             row["max_wall_penetration_dx"] = float(self.max_wall_penetration_dx)
         row.update(self.sensors)
+        if self.run_checks is not None:
+            row.update(self.run_checks.row(self))
         return row
 
     def frame(self) -> tuple[NDArray[np.float64], dict[str, NDArray]]:

@@ -15,6 +15,10 @@ largest speed              ``max_speed``                                        
 density-ratio range        ``min_density_ratio``, ``max_density_ratio``          –
 shape-function fallbacks   ``fallback_points`` (only when not all zero)          count
 wall penetration           ``wall_penetrations``, ``max_wall_penetration_dx``    count, Δx
+volume error               ``volume_error`` (geometric / Σ M/ρ − 1), in %        %
+pair distances             ``min_pair_distance_dx``, ``min_wall_distance_dx``    Δx
+clumped pairs              ``clumped_pairs`` (only when not all zero)            count
+Mach number                ``mach`` (max |v|/c0)                                 –
 time step                  ``dt``                                                s
 each probe                 every other column (a problem's probes)               as recorded
 =========================  ====================================================  ===============
@@ -47,7 +51,8 @@ logger = logging.getLogger(__name__)
 _SKIP = {"time", "step"}
 _CORE = {"kinetic_energy", "potential_energy", "total_mass", "momentum_x", "momentum_y", "momentum_z",
          "max_speed", "min_density_ratio", "max_density_ratio", "dt", "fallback_points",
-         "wall_penetrations", "max_wall_penetration_dx"}
+         "wall_penetrations", "max_wall_penetration_dx", "geometric_volume", "volume_error",
+         "min_pair_distance_dx", "clumped_pairs", "min_wall_distance_dx", "mach"}
 
 
 def _per_depth(unit: str, dim: int) -> str:
@@ -96,6 +101,22 @@ def _panels(cols: Mapping[str, np.ndarray], dim: int, units: Mapping[str, str]) 
     if "max_wall_penetration_dx" in cols:
         panels.append({"title": "deepest wall penetration", "ylabel": "depth (particle spacings)",
                        "lines": [("deepest", cols["max_wall_penetration_dx"], "-")], "ref": None})
+    if "volume_error" in cols:
+        panels.append({"title": "volume error", "ylabel": "V_geo / Σ M/ρ − 1 (%)",
+                       "lines": [("volume error", 100.0 * np.asarray(cols["volume_error"], dtype=np.float64), "-")],
+                       "ref": 0.0})
+    pairs = [(label, np.where(np.isfinite(v := np.asarray(cols[k], dtype=np.float64)), v, np.nan), "-")
+             for k, label in (("min_pair_distance_dx", "fluid–fluid"), ("min_wall_distance_dx", "fluid–wall"))
+             if k in cols]
+    if pairs:
+        panels.append({"title": "smallest pair distance", "ylabel": "distance (particle spacings)",
+                       "lines": pairs, "ref": 0.5})
+    if "clumped_pairs" in cols and np.any(np.asarray(cols["clumped_pairs"]) != 0):
+        panels.append({"title": "clumped pairs (closer than 0.5 spacings)", "ylabel": "pairs (count)",
+                       "lines": [("clumped pairs", cols["clumped_pairs"], "-")], "ref": None})
+    if "mach" in cols:
+        panels.append({"title": "Mach number", "ylabel": "max |v| / c0 (–)",
+                       "lines": [("Mach", cols["mach"], "-")], "ref": 0.1})
     if "dt" in cols:
         dt = np.asarray(cols["dt"], dtype=np.float64)
         panels.append({"title": "time step", "ylabel": "dt (s)",

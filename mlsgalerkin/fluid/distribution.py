@@ -1,0 +1,251 @@
+r"""How the fluid particles fill space: the geometric volume and the pair-distance statistics.
+
+**Geometric volume.** Each fluid particle stands for the cell
+:math:`C_i = [\mathbf x_i - \tfrac12\Delta x,\ \mathbf x_i + \tfrac12\Delta x]^d` of the spacing
+:math:`\Delta x` it was built at. The geometric volume (m^d; m² per unit depth in 2D) is the
+measure of the union of the cells with the gaps narrower than :data:`CLOSED_GAP` spacings closed:
+
+.. math:: V_\text{geo} = \bigl|\,\operatorname{close}_{g}\bigl(\textstyle\bigcup_i C_i\bigr)\bigr|,
+
+evaluated on a grid of pixels (voxels) of side :math:`\Delta x/k` (:data:`PIXELS_PER_SPACING`):
+a pixel belongs to a cell when its centre does; the closing is a maximum filter then a minimum
+filter over a box of :math:`2r + 1` pixels, :math:`r = \lceil g k / 2 \rceil` (it fills every
+gap up to :math:`2r` pixels wide and leaves convex shapes as they were). It compares with the
+volume the particles' masses and densities say, :math:`\sum_f M_f/\rho_f`; their ratio minus one
+is the **volume error**. A fluid that packs tighter than :math:`M/\rho` (pairing, clumping, a
+collapsing column) reads a negative error, one that opens voids a positive one.
+
+Measured (``tests/test_fluid_distribution.py``): a lattice block gives :math:`N\Delta x^d`
+exactly (its union is a box whose sides are whole numbers of pixels); a lattice jittered by
+±0.2 Δx within 1 % (the closing fills the cracks between the cells, up to 0.4 Δx wide; over 60
+seeds the mean error is below 0.05 %, its standard deviation 0.19 % for 800 particles in 2D,
+0.25 % for 1800 and 0.09 % for 8000 in 3D — the pixel sampling of the ragged boundary —, the
+largest 0.63 %); a
+block of 60 particles along one axis compressed by 10 % along it reads 9.75 % less (its outer
+half cells keep their size: :math:`(0.9 \cdot 59 + 1)/60`, within one pixel); an isolated particle
+(a splash) its own cell exactly; a disc cut from a lattice its cells exactly (the closing leaves
+the one-spacing steps of its boundary open). Cost (one thread, 2 shared cores): 20 000 particles
+in a 2D block 5–9 ms, 100 000 in a jittered 3D block 0.14–0.18 s, an 800-particle dam break
+spread over a 0.3 m × 0.45 m tank 1.7 ms (the grid spans the particles' bounding box; the
+closing, two :mod:`scipy.ndimage` filters over it, is most of the cost): cheap enough for a
+time-series row, too dear for every step. The grid is coarsened (``k`` halved) when the
+bounding box would hold more than :data:`MAX_PIXELS` pixels (a splash far from the bulk), so the
+memory stays bounded.
+
+**Pair statistics.** From the neighbour table (CSR ``indptr``, ``indices``; every pair closer
+than the kernel's support is in it): the smallest fluid–fluid pair distance and the number of
+fluid–fluid pairs closer than :data:`CLUMP_DISTANCE` spacings (each pair counted once), and the
+smallest fluid–wall distance, all in spacings. On a lattice the smallest pair distance is 1 and
+no pair is clumped; a fluid at rest keeps it near 0.8–1 (shifting spreads the particles). Pairs
+closer than half a spacing are two particles sitting in nearly one cell: the tensile (pairing)
+instability or a collapse that the volume error sees as lost volume.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numba import prange
+from numpy.typing import NDArray
+from scipy import ndimage
+
+from mlsgalerkin.pairs import pair_offset
+
+__all__ = [
+    "CLOSED_GAP",
+    "CLUMP_DISTANCE",
+    "MAX_PIXELS",
+    "PIXELS_PER_SPACING",
+    "PairStatistics",
+    "geometric_volume",
+    "occupancy",
+    "occupancy_reference",
+    "pair_statistics",
+    "pair_statistics_reference",
+]
+
+#: Pixels per spacing ``k`` of the grid the union of cells is measured on.
+PIXELS_PER_SPACING = 4
+#: Gaps between cells up to this many spacings wide are closed (a lattice jittered by ±0.2 Δx
+#: opens cracks up to 0.4 Δx).
+CLOSED_GAP = 0.5
+#: The largest grid (pixels or voxels of the bounding box); above it ``k`` is halved (down to 2).
+MAX_PIXELS = 40_000_000
+#: Fluid pairs closer than this many spacings are *clumped*.
+CLUMP_DISTANCE = 0.5
+
+
+@numba.njit(cache=True)
+def _rasterise(x, origin, pixel, half, shape, grid):
+    """Mark the pixels whose centres ``origin + (i + ½) pixel`` lie in a cell ``|c − x| < half``."""
+    n, dim = x.shape
+    lo = np.zeros(3, dtype=np.int64)
+    hi = np.zeros(3, dtype=np.int64)
+    for p in range(n):
+        for a in range(3):
+            lo[a] = 0
+            hi[a] = 0
+        for a in range(dim):
+            # centres c with x − half < c < x + half
+            u0 = (x[p, a] - half - origin[a]) / pixel - 0.5
+            u1 = (x[p, a] + half - origin[a]) / pixel - 0.5
+            i0 = int(math.floor(u0)) + 1
+            i1 = int(math.ceil(u1)) - 1
+            lo[a] = max(i0, 0)
+            hi[a] = min(i1, shape[a] - 1)
+        for i in range(lo[0], hi[0] + 1):
+            for j in range(lo[1], hi[1] + 1):
+                for k in range(lo[2], hi[2] + 1):
+                    grid[i, j, k] = 1
+
+
+def occupancy(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = PIXELS_PER_SPACING,
+              closed_gap: float = CLOSED_GAP) -> tuple[NDArray[np.uint8], float]:
+    """The closed union of the particles' cells on a pixel grid: ``(grid, pixel)`` with ``grid``
+    ``uint8`` of shape ``(m0, m1, m2)`` (1 inside; ``m2 = 1`` in 2D, ``m1 = m2 = 1`` in 1D) and the
+    pixel side ``pixel`` (m). ``x (n, d)`` positions (m), ``spacing`` the cell side Δx (m)."""
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    n, dim = x.shape
+    k = int(pixels_per_spacing)
+    r = max(1, math.ceil(closed_gap * k / 2))
+    lo = x.min(axis=0) - 0.5 * spacing
+    hi = x.max(axis=0) + 0.5 * spacing
+    while True:
+        pixel = spacing / k
+        pad = r + 1
+        shape = [int(math.ceil((hi[a] - lo[a]) / pixel)) + 2 * pad for a in range(dim)]
+        if k <= 2 or math.prod(shape) <= MAX_PIXELS:
+            break
+        k //= 2
+        r = max(1, math.ceil(closed_gap * k / 2))
+    origin = np.zeros(3)
+    origin[:dim] = lo - pad * pixel
+    full = np.ones(3, dtype=np.int64)
+    full[:dim] = shape
+    grid = np.zeros(tuple(full), dtype=np.uint8)
+    _rasterise(x, origin, pixel, 0.5 * spacing, full, grid)
+    size = tuple(2 * r + 1 if a < dim else 1 for a in range(3))
+    grid = ndimage.minimum_filter(ndimage.maximum_filter(grid, size=size, mode="constant", cval=0),
+                                  size=size, mode="constant", cval=0)
+    return grid, pixel
+
+
+def occupancy_reference(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = PIXELS_PER_SPACING,
+                        closed_gap: float = CLOSED_GAP) -> NDArray[np.uint8]:
+    """:func:`occupancy`'s grid with the cells marked by numpy, particle by particle (tests; no
+    coarsening)."""
+    x = np.asarray(x, dtype=np.float64)
+    dim = x.shape[1]
+    k = int(pixels_per_spacing)
+    r = max(1, math.ceil(closed_gap * k / 2))
+    pixel = spacing / k
+    pad = r + 1
+    lo = x.min(axis=0) - 0.5 * spacing
+    hi = x.max(axis=0) + 0.5 * spacing
+    shape = [int(math.ceil((hi[a] - lo[a]) / pixel)) + 2 * pad for a in range(dim)]
+    centres = np.meshgrid(*[lo[a] - pad * pixel + (np.arange(shape[a]) + 0.5) * pixel for a in range(dim)],
+                          indexing="ij")
+    grid = np.zeros(shape, dtype=bool)
+    for p in range(x.shape[0]):   # a test reference: a loop over the particles is fine here
+        inside = np.ones(shape, dtype=bool)
+        for a in range(dim):
+            inside &= np.abs(centres[a] - x[p, a]) < 0.5 * spacing
+        grid |= inside
+    size = (2 * r + 1,) * dim
+    closed = ndimage.minimum_filter(ndimage.maximum_filter(grid.astype(np.uint8), size=size, mode="constant", cval=0),
+                                    size=size, mode="constant", cval=0)
+    return closed.reshape(tuple(shape) + (1,) * (3 - dim))
+
+
+def geometric_volume(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = PIXELS_PER_SPACING,
+                     closed_gap: float = CLOSED_GAP) -> float:
+    """The geometric volume (m^d; m² per unit depth in 2D) of the particles at ``x (n, d)`` (m),
+    each standing for a cell of side ``spacing`` (m): the measure of the union of the cells with
+    the gaps up to ``closed_gap`` spacings closed, on a grid of ``spacing / pixels_per_spacing``
+    (module docstring). 0 without particles."""
+    if x.shape[0] == 0:
+        return 0.0
+    grid, pixel = occupancy(x, spacing, pixels_per_spacing, closed_gap)
+    return float(np.count_nonzero(grid)) * pixel ** x.shape[1]
+
+
+# --------------------------------------------------------------------------------------
+# pair statistics
+# --------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class PairStatistics:
+    """Pair distances of the fluid, in spacings: the smallest fluid–fluid distance
+    ``min_pair_distance_dx`` (``inf`` without a fluid pair in the table), the number of
+    fluid–fluid pairs closer than the clump distance ``clumped_pairs`` (each pair once), and the
+    smallest fluid–wall distance ``min_wall_distance_dx`` (``inf`` without one)."""
+
+    min_pair_distance_dx: float
+    clumped_pairs: int
+    min_wall_distance_dx: float
+
+
+@numba.njit(parallel=True, cache=True)
+def _pair_rows(indptr, indices, x, n_fluid, clump2, min_ff, clumped, min_fw):
+    for i in prange(n_fluid):
+        best_ff = np.inf
+        best_fw = np.inf
+        count = 0
+        for q in range(indptr[i], indptr[i + 1]):
+            j = indices[q]
+            if j == i:
+                continue
+            d0, d1, d2, r2 = pair_offset(x, i, j)
+            if j < n_fluid:
+                if j > i:   # each fluid pair once
+                    if r2 < best_ff:
+                        best_ff = r2
+                    if r2 < clump2:
+                        count += 1
+            elif r2 < best_fw:
+                best_fw = r2
+        min_ff[i] = best_ff
+        clumped[i] = count
+        min_fw[i] = best_fw
+
+
+def pair_statistics(indptr: NDArray[np.int64], indices: NDArray[np.int32], x: NDArray[np.float64], n_fluid: int,
+                    spacing: float, clump_distance: float = CLUMP_DISTANCE) -> PairStatistics:
+    """:class:`PairStatistics` of the fluid particles ``0 … n_fluid − 1`` from the neighbour table
+    of all particles (fluid first, then walls): CSR ``indptr (n + 1,)``, ``indices (nnz,)`` (a
+    symmetric table; only pairs in it are seen), positions ``x (n, d)`` (m), ``spacing`` Δx (m),
+    ``clump_distance`` in spacings."""
+    min_ff = np.empty(n_fluid)
+    clumped = np.empty(n_fluid, dtype=np.int64)
+    min_fw = np.empty(n_fluid)
+    _pair_rows(np.ascontiguousarray(indptr), np.ascontiguousarray(indices), np.ascontiguousarray(x), n_fluid,
+               (clump_distance * spacing) ** 2, min_ff, clumped, min_fw)
+    return _statistics(min_ff, clumped, min_fw, spacing)
+
+
+def _statistics(min_ff, clumped, min_fw, spacing) -> PairStatistics:
+    ff = float(min_ff.min()) if min_ff.size else np.inf
+    fw = float(min_fw.min()) if min_fw.size else np.inf
+    return PairStatistics(math.sqrt(ff) / spacing, int(clumped.sum()), math.sqrt(fw) / spacing)
+
+
+def pair_statistics_reference(indptr, indices, x, n_fluid, spacing, clump_distance=CLUMP_DISTANCE) -> PairStatistics:
+    """Numpy version of :func:`pair_statistics` (tests)."""
+    rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
+    cols = np.asarray(indices, dtype=np.int64)
+    keep = (rows < n_fluid) & (cols != rows)
+    rows, cols = rows[keep], cols[keep]
+    d = x[cols] - x[rows]
+    r2 = np.zeros(len(rows))
+    for a in range(x.shape[1]):    # left to right, as pair_offset sums
+        r2 = r2 + d[:, a] * d[:, a]
+    ff = (cols < n_fluid) & (cols > rows)
+    fw = cols >= n_fluid
+    min_ff = np.array([r2[ff].min()]) if ff.any() else np.array([np.inf])
+    min_fw = np.array([r2[fw].min()]) if fw.any() else np.array([np.inf])
+    clumped = np.array([np.count_nonzero(r2[ff] < (clump_distance * spacing) ** 2)])
+    return _statistics(min_ff, clumped, min_fw, spacing)

@@ -1,0 +1,153 @@
+"""The run checks of the fluid (:mod:`mlsgalerkin.fluid.run_checks`): the time-series columns and
+summary entries of the volume, the pair distances, the Mach number and the fallback shares, and
+the one warning each past its documented limit."""
+
+from __future__ import annotations
+
+import math
+import re
+import warnings
+
+import numpy as np
+import pytest
+
+from mlsgalerkin.fluid import (
+    FluidBody,
+    Gravity,
+    MachNumberWarning,
+    MonaghanViscosity,
+    ParticleClumpingWarning,
+    Phase,
+    ShapeFunctionFallbackWarning,
+    TaitPressure,
+    VolumeErrorWarning,
+    Walls,
+    wall_box,
+)
+from mlsgalerkin.fluid import run_checks
+from mlsgalerkin.fluid.scheme import FluidScheme
+from mlsgalerkin.scene import Scene
+from mlsgalerkin.simulation import Simulation
+
+DX = 0.02
+WATER = [Phase("water", 1000.0)]
+COLUMNS = ("geometric_volume", "volume_error", "min_pair_distance_dx", "clumped_pairs", "min_wall_distance_dx", "mach")
+
+
+def _tank(water: FluidBody, c0: float = 20.0, t_end: float = 0.02, **scene_kw) -> Scene:
+    walls = wall_box((0.0, 0.0), (0.4, 0.4), DX)
+    effects = [TaitPressure(c0), Gravity(), Walls(), MonaghanViscosity(0.1)]
+    return Scene([water, walls], [FluidScheme(effects)], t_end=t_end, **scene_kw)
+
+
+def _run(scene: Scene, prepare=None):
+    sim = Simulation(scene)
+    if prepare is not None:
+        prepare(sim.state.fluid)   # after the scene's checks (which refuse overlapping particles)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = sim.run(progress=False)
+    return res, caught
+
+
+def _warned(caught, category) -> list[str]:
+    return [str(w.message) for w in caught if issubclass(w.category, category)]
+
+
+def test_a_sound_block_reports_its_volume_and_distribution_without_warning():
+    water = FluidBody.block("water", (0.0, 0.0), (0.4, 0.2), DX, WATER)
+    res, caught = _run(_tank(water))
+    ts = res.timeseries
+    for c in COLUMNS:
+        assert c in ts, c
+    for c in ("kinetic_energy", "max_speed", "fallback_points", "wall_penetrations"):   # kept
+        assert c in ts, c
+    assert ts["geometric_volume"][0] == pytest.approx(water.n * DX**2, rel=1e-12)
+    assert abs(ts["volume_error"][0]) < 1e-12
+    assert ts["min_pair_distance_dx"][0] == pytest.approx(1.0) and ts["clumped_pairs"][0] == 0
+    assert ts["min_wall_distance_dx"][0] == pytest.approx(1.0)
+    assert np.all(np.abs(ts["volume_error"]) < 0.01)
+    speed = ts["max_speed"]
+    np.testing.assert_allclose(ts["mach"], speed / 20.0, rtol=1e-12)
+    rep = res.summary["fluid"]["run_checks"]
+    assert rep["volume"]["max_abs_error"] < 0.01 and not rep["volume"]["warned"]
+    assert rep["volume"]["error_last"] == pytest.approx(ts["volume_error"][-1])
+    assert rep["particle_distribution"]["max_clumped_pairs"] == 0
+    assert rep["mach"]["max"] >= ts["mach"].max() and rep["mach"]["c0"] == 20.0 and not rep["mach"]["warned"]
+    fb = rep["shape_function_fallback"]
+    assert fb["evaluations"] == res.summary["steps"] + 1 and fb["point_share"] == 0.0
+    for cat in (VolumeErrorWarning, ParticleClumpingWarning, MachNumberWarning, ShapeFunctionFallbackWarning):
+        assert not _warned(caught, cat), cat
+
+
+def test_a_compressed_block_is_warned_as_lost_volume():
+    water = FluidBody.block("water", (0.0, 0.0), (0.4, 0.2), DX, WATER)
+    water.positions[:, 1] *= 0.95    # the particles pack 5 % tighter than M/ρ says
+    res, caught = _run(_tank(water, t_end=0.005))
+    assert res.timeseries["volume_error"][0] == pytest.approx(-0.05 * (9 / 10), abs=0.01)
+    rep = res.summary["fluid"]["run_checks"]["volume"]
+    assert rep["warned"] and rep["max_abs_error"] > 0.03 and rep["time_of_max_s"] is not None
+    msg = _warned(caught, VolumeErrorWarning)
+    assert len(msg) == 1 and "lost" in msg[0] and "limit 1%" in msg[0]
+
+
+def test_clumped_pairs_are_counted_and_warned_once():
+    water = FluidBody.block("water", (0.0, 0.0), (0.4, 0.2), DX, WATER)
+
+    def clump(s):
+        s.x[30] = s.x[31] + (0.3 * DX, 0.0)
+
+    res, caught = _run(_tank(water, t_end=0.005), clump)
+    assert res.timeseries["clumped_pairs"][0] == 1
+    assert res.timeseries["min_pair_distance_dx"][0] == pytest.approx(0.3)
+    rep = res.summary["fluid"]["run_checks"]["particle_distribution"]
+    assert rep["max_clumped_pairs"] >= 1 and rep["min_pair_distance_dx"] <= 0.3 + 1e-9 and rep["warned"]
+    assert rep["time_of_min_s"] is not None and rep["clump_distance_dx"] == 0.5
+    assert len(_warned(caught, ParticleClumpingWarning)) == 1
+
+
+def test_a_fast_flow_is_warned_with_the_sound_speed_to_use():
+    water = FluidBody.block("water", (0.05, 0.05), (0.25, 0.15), DX, WATER, velocity=(3.5, 0.0))
+    # c0 = 20 m/s against 3.5 m/s: Mach 0.175 > 0.15 from the first step
+    res, caught = _run(_tank(water, c0=20.0, t_end=0.005))
+    rep = res.summary["fluid"]["run_checks"]["mach"]
+    assert rep["max"] > run_checks.MACH_LIMIT and rep["warned"]
+    msg = _warned(caught, MachNumberWarning)
+    assert len(msg) == 1
+    raise_to = float(re.search(r"Raise c0 to at least ([0-9.]+) m/s", msg[0]).group(1))
+    assert raise_to == pytest.approx(3.5 / run_checks.MACH_TARGET, rel=0.05)   # the speed then, at Mach 0.1
+    assert res.timeseries["mach"][0] == pytest.approx(3.5 / 20.0)
+
+
+def test_fallback_shares_are_reported_and_warned(monkeypatch):
+    # a spray of particles three spacings apart: none has enough neighbours for linear MLS
+    monkeypatch.setattr(run_checks, "FALLBACK_MIN_EVALUATIONS", 5)
+    spray = FluidBody("spray", np.array([[0.05 + 3 * DX * i, 0.2] for i in range(5)]), DX, WATER)
+    res, caught = _run(_tank(spray, t_end=0.004))
+    fb = res.summary["fluid"]["run_checks"]["shape_function_fallback"]
+    assert fb["evaluation_share"] == 1.0 and fb["point_share"] == pytest.approx(1.0)
+    assert fb["warned"] and fb["point_share_limit"] == run_checks.FALLBACK_POINT_SHARE_LIMIT
+    assert len(_warned(caught, ShapeFunctionFallbackWarning)) == 1
+
+
+def test_the_distribution_is_evaluated_at_most_every_few_steps(monkeypatch):
+    calls = []
+    real = run_checks.geometric_volume
+    monkeypatch.setattr(run_checks, "geometric_volume", lambda x, dx: calls.append(1) or real(x, dx))
+    water = FluidBody.block("water", (0.0, 0.0), (0.4, 0.2), DX, WATER)
+    res = Simulation(_tank(water, t_end=0.01)).run(progress=False)   # a row every step
+    steps = res.summary["steps"]
+    assert len(res.timeseries["time"]) == steps + 1
+    assert len(calls) == math.ceil((steps + 1) / run_checks.DISTRIBUTION_EVERY_STEPS)
+
+
+def test_the_checks_state_round_trips():
+    a = run_checks.FluidRunChecks()
+    a.volume.update(max_abs_error=0.02, time_of_max_s=1.5, warned=True)
+    a.pairs.update(min_pair_distance_dx=0.4, max_clumped_pairs=3)
+    a.mach.update(max=0.2, warned=True)
+    a.fallback.update(evaluations=17)
+    a.last.update(step=40, columns={"volume_error": -0.02, "clumped_pairs": 3})
+    b = run_checks.FluidRunChecks()
+    b.load_state_dict(a.state_dict())
+    assert b.state_dict() == a.state_dict()
