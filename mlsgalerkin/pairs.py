@@ -26,7 +26,7 @@ import numpy as np
 from numba import prange
 from numpy.typing import NDArray
 
-from mlsgalerkin.periodic import minimum_image
+from mlsgalerkin.periodic import as_period, minimum_image
 
 __all__ = ["image_component", "pair_offset", "pair_offsets", "pair_offsets_reference"]
 
@@ -45,7 +45,7 @@ def pair_offset(x, i, j, period):
     """``(d0, d1, d2, r2)``: the offset ``x[j] − x[i]`` (m; components beyond ``x.shape[1]`` are 0)
     and its squared length (m²), for positions ``x`` ``(n, d)``, ``d ≤ 3``; along an axis with
     ``period[a] > 0`` (m) the minimum image ``d_a − L_a ⌊d_a/L_a + ½⌋`` (:mod:`mlsgalerkin.periodic`).
-    ``period`` is a ``(3,)`` float array, all zeros for a domain without periodic axes."""
+    ``period`` is a tuple of three floats, all zeros for a domain without periodic axes."""
     dim = x.shape[1]
     d0 = x[j, 0] - x[i, 0]
     d1 = x[j, 1] - x[i, 1] if dim > 1 else 0.0
@@ -76,7 +76,7 @@ def pair_offsets(x: NDArray[np.float64], indptr: NDArray[np.int64], indices: NDA
     x = np.ascontiguousarray(x, dtype=np.float64)
     d = np.zeros((indices.shape[0], 3))
     r2 = np.zeros(indices.shape[0])
-    period = np.zeros(3) if period is None else np.ascontiguousarray(period, dtype=np.float64)
+    period = as_period(period)
     _offsets(x, np.ascontiguousarray(indptr, dtype=np.int64), np.ascontiguousarray(indices), period, d, r2)
     return d, r2
 
@@ -90,7 +90,7 @@ def pair_offsets_reference(x: NDArray[np.float64], indptr: NDArray[np.int64], in
     d = np.zeros((len(indices), 3))
     d[:, : x.shape[1]] = x[indices] - x[rows]
     if period is not None:
-        d = minimum_image(d, np.asarray(period, dtype=np.float64))
+        d = minimum_image(d, as_period(period))
     r2 = np.zeros(len(indices))
     for a in range(3):              # left to right, as the kernel sums
         r2 = r2 + d[:, a] * d[:, a]

@@ -10,15 +10,18 @@ near opposite ends are neighbours across the seam. Every pair offset of such a d
 
     d_a \leftarrow d_a - L_a \,\lfloor d_a / L_a + 1/2 \rfloor ,
 
-which maps ``d_a`` into ``[−L_a/2, L_a/2)``; the numba kernels receive the periods as one float
-array ``period (3,)`` (m) whose ``0.0`` entries mark the axes that are not periodic (their
-offsets are left untouched, bit for bit). With a kernel support ``R`` no longer than ``L_a/2``
+which maps ``d_a`` into ``[−L_a/2, L_a/2)``; the numba kernels receive the periods as a tuple of
+three floats ``period`` (m) whose ``0.0`` entries mark the axes that are not periodic (their
+offsets are left untouched, bit for bit). A tuple, not an array: it is passed by value, so the
+compiled loops keep the three periods in registers (an array's entries would be reloaded at every
+pair, as the loops also write arrays), and a run without periodic axes pays one comparison per
+offset component. With a kernel support ``R`` no longer than ``L_a/2``
 the minimum image is the only image within reach, so each pair is counted once.
 
 >>> import numpy as np
 >>> box = Periodic(x=(0.0, 1.0))
->>> box.period(2).tolist(), box.axes(2)
-([1.0, 0.0, 0.0], (0,))
+>>> box.period(2).tolist(), box.axes(2), kernel_period(box, 2)
+([1.0, 0.0, 0.0], (0,), (1.0, 0.0, 0.0))
 >>> x = np.array([[1.05, 0.3], [-0.2, 0.7]])
 >>> box.wrap(x)
 >>> np.round(x, 12).tolist()
@@ -35,10 +38,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["NO_PERIOD", "Periodic", "as_period", "minimum_image", "period_array"]
+__all__ = ["NO_PERIOD", "Periodic", "as_period", "kernel_period", "minimum_image"]
 
-#: The ``period`` array of a domain without periodic axes (three zeros).
-NO_PERIOD = np.zeros(3)
+#: The kernels' ``period`` of a domain without periodic axes (three zeros).
+NO_PERIOD = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -119,22 +122,22 @@ class Periodic:
                 for name, iv in zip("xyz", self.intervals())}
 
 
-def period_array(periodic: Periodic | None, dim: int) -> NDArray[np.float64]:
-    """The ``(3,)`` period array the kernels take: :data:`NO_PERIOD` (zeros) without ``periodic``."""
-    return NO_PERIOD.copy() if periodic is None else periodic.period(dim)
+def kernel_period(periodic: Periodic | None, dim: int) -> tuple[float, float, float]:
+    """The periods the kernels take (three floats, m): :data:`NO_PERIOD` without ``periodic``."""
+    return NO_PERIOD if periodic is None else as_period(periodic.period(dim))
 
 
-def as_period(period: ArrayLike | None) -> NDArray[np.float64]:
-    """A kernel's ``period (3,)`` array (m) from ``None`` (no periodic axis: zeros) or one period
-    per axis (1 to 3 values, ``0`` for an axis that is not periodic)."""
+def as_period(period: ArrayLike | None) -> tuple[float, float, float]:
+    """A kernel's ``period`` (three floats, m) from ``None`` (no periodic axis: zeros) or one
+    period per axis (1 to 3 values, ``0`` for an axis that is not periodic)."""
     if period is None:
-        return NO_PERIOD.copy()
+        return NO_PERIOD
     p = np.asarray(period, dtype=np.float64).ravel()
     if not 1 <= p.size <= 3 or not (np.isfinite(p).all() and (p >= 0).all()):
         raise ValueError(f"period must hold 1 to 3 non-negative finite periods (0: not periodic), got {period!r}")
     out = np.zeros(3)
     out[: p.size] = p
-    return out
+    return (float(out[0]), float(out[1]), float(out[2]))
 
 
 def minimum_image(d: NDArray[np.float64], period: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.fluid import FluidBody, Periodic, Phase, WallBody, water
+from mlsgalerkin.approximation.settings import Approximation
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
 
@@ -52,6 +53,7 @@ class Parameters:
     shifting: str = "local"          #: particle shifting: local, design or off (choice)
     consistent_integration: bool = False  #: consistent nodal integration (bool)
     h_factor: float = 1.3            #: smoothing length / particle spacing, h/dx (–)
+    basis: str = "linear"            #: MLS basis: linear or quadratic (choice)
     frame_every: float = 1.0         #: time between VTU frames (s)
     gif: bool = False                #: render animation.gif and final.png (bool)
 
@@ -109,7 +111,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     scheme = water(c0, u_max=p.u_max, gravity=(body_force(p), 0.0), slip="no_slip", alpha=p.alpha,
                    flow=(p.u_max, p.height), newtonian=True, delta=p.delta, shifting=p.shifting,
                    negative_pressure="allow", consistent_integration=p.consistent_integration, spacing=p.dx,
-                   h_factor=p.h_factor, periodic=Periodic(x=(0.0, p.length)))
+                   approximation=Approximation(h_factor=p.h_factor, basis=p.basis),
+                   periodic=Periodic(x=(0.0, p.length)))
     return Scene(
         [body, walls], [scheme], t_end=p.t_end, name="poiseuille",
         output=Output(every=p.frame_every, probe_every=p.t_end / 100.0, gif=p.gif, png=p.gif, color_by="speed"),
@@ -152,6 +155,7 @@ def check(p: Parameters) -> list[str]:
     out = require_positive(p, "height", "length", "u_max", "reynolds", "rho", "dx", "t_end", "c0_factor", "h_factor",
                            "frame_every")
     out += require_nonnegative(p, "alpha", "delta")
+    out += require(p.basis in ("linear", "quadratic"), f"basis must be linear or quadratic, got {p.basis!r}")
     out += require(p.shifting in ("local", "design", "off"), f"shifting must be local, design or off, got {p.shifting!r}")
     if not out:
         for name in ("height", "length"):

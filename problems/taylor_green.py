@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.fluid import FluidBody, ParticleShifting, Periodic, Phase, tait_density, water
+from mlsgalerkin.approximation.settings import Approximation
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
 
@@ -60,6 +61,7 @@ class Parameters:
     shifting_surface: float = 0.02   #: λ below which shifting treats a particle as at a free surface; the preset's 0.9 (–)
     consistent_integration: bool = False  #: consistent nodal integration (bool)
     h_factor: float = 1.3            #: smoothing length / particle spacing, h/dx (–)
+    basis: str = "linear"            #: MLS basis: linear or quadratic (choice)
     frame_every: float = 0.25        #: time between VTU frames (s)
     gif: bool = False                #: render animation.gif and final.png (bool)
 
@@ -110,7 +112,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                                   splash=0.5 * p.shifting_surface)])
     scheme = water(c0, u_max=p.speed, gravity=None, slip=None, alpha=p.alpha, flow=(p.speed, p.side),
                    newtonian=True, delta=p.delta, shifting="off", negative_pressure="allow",
-                   consistent_integration=p.consistent_integration, spacing=p.dx, h_factor=p.h_factor,
+                   consistent_integration=p.consistent_integration, spacing=p.dx,
+                   approximation=Approximation(h_factor=p.h_factor, basis=p.basis),
                    extra=shifting, periodic=Periodic(x=(0.0, p.side), y=(0.0, p.side)))
     return Scene(
         [body], [scheme], t_end=p.t_end, name="taylor_green",
@@ -158,6 +161,7 @@ def check(p: Parameters) -> list[str]:
     """Problems with the parameters (see ``mlsgalerkin.problem``)."""
     out = require_positive(p, "side", "speed", "reynolds", "rho", "dx", "t_end", "c0_factor", "h_factor", "frame_every")
     out += require_nonnegative(p, "alpha", "delta")
+    out += require(p.basis in ("linear", "quadratic"), f"basis must be linear or quadratic, got {p.basis!r}")
     out += require(p.shifting in ("local", "design", "off"), f"shifting must be local, design or off, got {p.shifting!r}")
     out += require(0 < p.shifting_surface < 1, f"shifting_surface must be in (0, 1), got {p.shifting_surface!r}")
     if not out:

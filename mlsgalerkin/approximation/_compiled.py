@@ -20,7 +20,7 @@ entry, and ``cond_1(M) <= cond_limit``.
 Two implementations: :func:`general_shape_kernel` (any order/dimension; optional Gram–Schmidt)
 and :func:`linear2d_shape_kernel` (2D linear, closed-form 3x3 inverse, fused loops).
 
-Periodic domains: every kernel takes ``period (3,)`` (m; ``0`` on the axes that are not
+Periodic domains: every kernel takes ``period`` (three floats, m; ``0`` on the axes that are not
 periodic) and uses the minimum image of each offset ``x_j − x`` along the periodic axes
 (:func:`mlsgalerkin.pairs.image_component`), so a node across the seam enters the moment matrix
 at its image; with all periods zero the offsets are the plain differences, bit for bit.

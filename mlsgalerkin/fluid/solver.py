@@ -47,7 +47,7 @@ from mlsgalerkin.fluid.time_step import force_limit
 from mlsgalerkin.io.files import to_jsonable
 from mlsgalerkin.kernels import get_kernel
 from mlsgalerkin.neighbors import find_neighbors
-from mlsgalerkin.periodic import minimum_image, period_array
+from mlsgalerkin.periodic import Periodic, kernel_period, minimum_image
 
 __all__ = ["FluidSolver", "StageTimer", "WallPenetrationWarning", "build_state"]
 
@@ -157,7 +157,7 @@ class FluidSolver(Solver):
         if len(spacings) > 1:
             out.append(f"fluid bodies must share one particle spacing, got {sorted(spacings)}")
         out.extend(cls._spacing_problems(bodies, scheme, fluids))
-        if scheme.periodic is not None and fluids and len({b.dim for b in bodies}) == 1:
+        if isinstance(scheme.periodic, Periodic) and fluids and len({b.dim for b in bodies}) == 1:
             out.extend(cls._periodic_problems(bodies, scheme, fluids))
         for w in (b for b in bodies if isinstance(b, WallBody) and b.motion is not None):
             out.extend(f"wall body {w.name!r}: {p}" for p in w.motion.check(w.dim))
@@ -298,7 +298,7 @@ class FluidSolver(Solver):
         s = self._state
         s.approximation_order = ap.order
         self.periodic = scheme.periodic
-        s.period = period_array(self.periodic, s.dim)
+        s.period = kernel_period(self.periodic, s.dim)
         self._lower = self.periodic.lower(s.dim) if self.periodic is not None else None
         self.search_radius = self.kernel.support * s.h + ap.skin * s.spacing
         self._stage_effects = {st: [e for e in self.effects if st in e.stages] for st in STAGES}
