@@ -15,7 +15,12 @@ body force is set from the centre speed and the Reynolds number ``Re = u_max H/�
 Measured (``analyse``): at the end, the fluid particles' x velocity averaged over each lattice row
 (``Δx`` thick) against the series at the row's mean height; the largest deviation and the RMS
 deviation over the rows in units of ``u_max`` (acceptance: largest below 1 %), and the centre-row
-speed against the series. ``verification/fluid_periodic.py`` runs two resolutions.
+speed against the series. The deviation is split into its smooth part (both profiles filtered
+over three rows with weights ¼, ½, ¼, which removes a row-to-row alternation) and the amplitude
+of the alternation itself: measured, nearly all of the deviation is a sawtooth across the channel
+(alternate rows too fast and too slow, largest at the walls) — a mode the linear MLS gradient at
+the nodes does not see, so the nodal-integrated viscosity does not damp it — while the smooth
+profile meets the series within 1 %. ``verification/fluid_periodic.py`` runs two resolutions.
 """
 
 from __future__ import annotations
@@ -90,6 +95,11 @@ def row_profile(x: np.ndarray, v: np.ndarray, p: Parameters) -> tuple[np.ndarray
     return y, u
 
 
+def three_row_filter(u: np.ndarray) -> np.ndarray:
+    """``¼ u[k−1] + ½ u[k] + ¼ u[k+1]`` over the inner rows (removes a row-to-row alternation)."""
+    return 0.25 * u[:-2] + 0.5 * u[1:-1] + 0.25 * u[2:]
+
+
 def make_scene(p: Parameters = Parameters()) -> Scene:
     c0 = p.c0_factor * p.u_max
     nu = viscosity(p)
@@ -129,6 +139,8 @@ def analyse(result, p: Parameters) -> dict:
     exact = series_velocity(y, s.t, p)
     dev = (u - exact) / p.u_max
     centre = int(np.argmin(np.abs(y - 0.5 * p.height)))
+    smooth = (three_row_filter(u) - three_row_filter(exact)) / p.u_max
+    sawtooth = dev[1:-1] - three_row_filter(dev)
     ts = result.timeseries
     out = {
         "reynolds_number": p.reynolds,
@@ -138,6 +150,8 @@ def analyse(result, p: Parameters) -> dict:
         "steady_fraction": float(series_velocity(np.array([0.5 * p.height]), s.t, p)[0] / p.u_max),
         "profile_error_max": float(np.max(np.abs(dev))),
         "profile_error_rms": float(np.sqrt(np.mean(dev**2))),
+        "profile_error_max_smooth": float(np.max(np.abs(smooth))),
+        "row_alternation_amplitude": float(np.max(np.abs(sawtooth))),
         "centre_speed_m_s": float(u[centre]),
         "centre_speed_exact_m_s": float(exact[centre]),
         "profile_error_max_over_run": float(np.max(np.asarray(ts["profile_error"], dtype=float))),
@@ -146,7 +160,9 @@ def analyse(result, p: Parameters) -> dict:
     }
     out["headline"] = (f"velocity profile within {100 * out['profile_error_max']:.2f} % of u_max of the start-up series "
                        f"at t = {s.t:.3g} s (RMS {100 * out['profile_error_rms']:.2f} %; the flow at "
-                       f"{100 * out['steady_fraction']:.0f} % of steady); Re = {p.reynolds:g}")
+                       f"{100 * out['steady_fraction']:.0f} % of steady); smooth part within "
+                       f"{100 * out['profile_error_max_smooth']:.2f} %, row-to-row alternation "
+                       f"{100 * out['row_alternation_amplitude']:.2f} %; Re = {p.reynolds:g}")
     return out
 
 
