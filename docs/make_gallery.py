@@ -132,6 +132,11 @@ ENTRIES: tuple[Entry, ...] = (
           "A body force drives the fluid between two no-slip walls (three layers of wall particles "
           "each), periodic along the channel, at Re = 10, five seconds after the start from rest: the "
           "velocity has grown to the parabolic profile, fastest at the centre line."),
+    Entry("couette", {"dx": 0.05, "t_end": 5.0, "frame_every": 5.0}, "velocity_x",
+          "Plane Couette flow",
+          "The top wall slides to the right at 1 m/s over fluid between two no-slip walls, periodic "
+          "along the channel, at Re = 10, five seconds after the start from rest: the velocity has "
+          "grown to the linear profile, from rest at the floor to the wall's speed under the lid."),
 )
 
 

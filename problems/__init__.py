@@ -1,6 +1,6 @@
 """Runnable scenes shipped with mlsgalerkin, one module per problem (installed as
 ``mlsgalerkin.problems``): ``hydrostatic``, ``dam_break``, ``gravity_current``,
-``drop_impact``, ``wave_maker``, the periodic ``taylor_green`` and ``poiseuille``, and the others
+``drop_impact``, ``wave_maker``, the periodic ``taylor_green``, ``poiseuille`` and ``couette``, and the others
 ``mlsgalerkin problems`` lists.
 
 Each defines ``Parameters`` (named, with defaults), ``make_scene``, ``analyse`` and ``SMOKE``,
