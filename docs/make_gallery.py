@@ -121,6 +121,22 @@ ENTRIES: tuple[Entry, ...] = (
           "The tank of the dam break with wall impact, whose end wall is a 2 m rigid beam of 1 kg on a "
           "hinge with a rotational spring (Sun 2016), 1.2 s after the column was released: the surge "
           "has run up the beam and turned it several degrees outward."),
+    Entry("taylor_green", {"dx": 0.03125, "t_end": 0.5, "frame_every": 0.5}, "speed",
+          "Taylor–Green vortex",
+          "The doubly periodic array of vortices at Re = 100 (box side 1 m, U = 1 m/s, 32 × 32 "
+          "particles), half a second after the start: the four vortices keep their shape while their "
+          "speed decays under the viscosity; particles crossing the box's edges re-enter on the other "
+          "side."),
+    Entry("poiseuille", {"dx": 0.05, "t_end": 5.0, "frame_every": 5.0}, "velocity_x",
+          "Plane Poiseuille flow",
+          "A body force drives the fluid between two no-slip walls (three layers of wall particles "
+          "each), periodic along the channel, at Re = 10, five seconds after the start from rest: the "
+          "velocity has grown to the parabolic profile, fastest at the centre line."),
+    Entry("couette", {"dx": 0.05, "t_end": 5.0, "frame_every": 5.0}, "velocity_x",
+          "Plane Couette flow",
+          "The top wall slides to the right at 1 m/s over fluid between two no-slip walls, periodic "
+          "along the channel, at Re = 10, five seconds after the start from rest: the velocity has "
+          "grown to the linear profile, from rest at the floor to the wall's speed under the lid."),
 )
 
 

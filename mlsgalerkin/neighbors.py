@@ -13,6 +13,13 @@ Work is split into chunks of queries processed in parallel (numba ``prange``); e
 into a region sized by an exact upper bound (the occupancy of the cells it will visit), so the
 pass never overflows. :func:`brute_force_neighbors` is the O(n m) numpy reference.
 
+Periodic domains (``period=``, ``lower=``; :mod:`mlsgalerkin.periodic`): the nodes within the
+search reach of a periodic axis' ends are copied once more, shifted by ``±L`` across the seam
+(axis by axis, so the corners of a doubly periodic box get their diagonal images), the same cell
+list searches the nodes and their images, and each image's hit is reported as its source node.
+The pairs are those of the minimum-image distance; each pair appears once because a period must
+be at least twice the search radius.
+
 Example
 -------
 >>> import numpy as np
@@ -146,6 +153,8 @@ def find_neighbors(
     radius: ArrayLike | None = None,
     *,
     node_radius: ArrayLike | None = None,
+    period: ArrayLike | None = None,
+    lower: ArrayLike | None = None,
 ) -> NeighborTable:
     """All nodes within a radius of each evaluation point, by a numba cell-linked list.
 
@@ -159,6 +168,13 @@ def find_neighbors(
     node_radius : float or (n_nodes,) float array, optional
         Support radius of each node: pair if ``|x_i - y_j| < node_radius_j``.
 
+    period : one value per axis (m), optional
+        Periods of a periodic domain (``0``: the axis is not periodic): pairs are found across
+        the seam, by the minimum-image distance. Every period must be at least twice the largest
+        radius, and every point and node must lie in ``[lower, lower + period)`` on its periodic axes.
+    lower : one value per axis (m), optional
+        Lower ends of the periodic axes (default ``0``).
+
     Exactly one of ``radius`` and ``node_radius`` must be given.
 
     Returns
@@ -168,8 +184,60 @@ def find_neighbors(
     nodes_a = as_coordinates("nodes", nodes)
     points_a = nodes_a if points is nodes else as_coordinates("points", points, nodes_a.shape[1])
     r, scatter = _resolve_radii(points_a, nodes_a, radius, node_radius)
-    indptr, indices = _cell_list_search(points_a, nodes_a, r, scatter, points is nodes)
+    if period is not None and np.any(np.asarray(period, dtype=float) > 0):
+        indptr, indices = _periodic_search(points_a, nodes_a, r, scatter, period, lower)
+    else:
+        indptr, indices = _cell_list_search(points_a, nodes_a, r, scatter, points is nodes)
     return NeighborTable(indptr, indices, nodes_a.shape[0])
+
+
+def _periodic_box(dim: int, period: ArrayLike, lower: ArrayLike | None):
+    """``(period (dim,), lower (dim,))`` from one value per axis (fewer: the rest 0)."""
+    p = np.zeros(dim)
+    given = np.asarray(period, dtype=float).ravel()[:dim]
+    p[: given.size] = given
+    lo = np.zeros(dim)
+    if lower is not None:
+        given = np.asarray(lower, dtype=float).ravel()[:dim]
+        lo[: given.size] = given
+    if not (np.isfinite(p).all() and (p >= 0).all() and np.isfinite(lo).all()):
+        raise ValueError(f"period must be non-negative and finite and lower finite, got {period!r}, {lower!r}")
+    return p, lo
+
+
+def _periodic_search(points, nodes, r, scatter, period, lower):
+    """The cell-list search over the nodes and their images across each periodic seam."""
+    dim = nodes.shape[1]
+    p, lo = _periodic_box(dim, period, lower)
+    reach = float(r.max())
+    for a in np.flatnonzero(p > 0):
+        if p[a] < 2.0 * reach:
+            raise ValueError(
+                f"the period along axis {'xyz'[a]} ({p[a]:g} m) is shorter than twice the search radius "
+                f"({reach:g} m): a particle would meet another and its image; lengthen the periodic box"
+            )
+        for name, x in (("points", points), ("nodes", nodes)):
+            out = (x[:, a] < lo[a]) | (x[:, a] >= lo[a] + p[a])
+            if out.any():
+                k = int(np.flatnonzero(out)[0])
+                raise ValueError(
+                    f"{name} {k} at {x[k].tolist()} lies outside the periodic interval [{lo[a]:g}, "
+                    f"{lo[a] + p[a]:g}) of axis {'xyz'[a]}; wrap the positions into the box first"
+                )
+    ext, source = nodes, np.arange(nodes.shape[0])
+    rn = r if scatter else None
+    for a in np.flatnonzero(p > 0):
+        near_lo = np.flatnonzero(ext[:, a] < lo[a] + reach)           # their images lie past the upper end
+        near_hi = np.flatnonzero(ext[:, a] >= lo[a] + p[a] - reach)   # and these before the lower end
+        up, down = ext[near_lo].copy(), ext[near_hi].copy()
+        up[:, a] += p[a]
+        down[:, a] -= p[a]
+        ext = np.concatenate([ext, up, down])
+        source = np.concatenate([source, source[near_lo], source[near_hi]])
+        if scatter:
+            rn = np.concatenate([rn, rn[near_lo], rn[near_hi]])
+    indptr, indices = _cell_list_search(points, np.ascontiguousarray(ext), rn if scatter else r, scatter, False)
+    return indptr, source[indices].astype(np.int32)
 
 
 def brute_force_neighbors(
@@ -178,11 +246,14 @@ def brute_force_neighbors(
     radius: ArrayLike | None = None,
     *,
     node_radius: ArrayLike | None = None,
+    period: ArrayLike | None = None,
 ) -> NeighborTable:
-    """Reference all-pairs search (numpy, O(n_points * n_nodes)); rows sorted by node index."""
+    """Reference all-pairs search (numpy, O(n_points * n_nodes)); rows sorted by node index;
+    ``period`` (one per axis, m): minimum-image distances along the periodic axes."""
     nodes_a = as_coordinates("nodes", nodes)
     points_a = as_coordinates("points", points, nodes_a.shape[1])
     r, scatter = _resolve_radii(points_a, nodes_a, radius, node_radius)
+    per = _periodic_box(nodes_a.shape[1], period, None)[0] if period is not None else np.zeros(nodes_a.shape[1])
     rows, cols = [], []
     block = max(1, 2_000_000 // nodes_a.shape[0])
     for s in range(0, points_a.shape[0], block):
@@ -190,7 +261,10 @@ def brute_force_neighbors(
         d2 = np.zeros((p.shape[0], nodes_a.shape[0]))
         with np.errstate(over="ignore"):  # far-apart points: d2 = inf is the right answer
             for k in range(nodes_a.shape[1]):
-                d2 += (p[:, k, None] - nodes_a[None, :, k]) ** 2
+                diff = p[:, k, None] - nodes_a[None, :, k]
+                if per[k] > 0:
+                    diff -= per[k] * np.floor(diff / per[k] + 0.5)
+                d2 += diff**2
         r2 = (r[None, :] ** 2) if scatter else (r[s : s + block, None] ** 2)
         i, j = np.nonzero(d2 < r2)
         rows.append(i + s)

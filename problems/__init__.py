@@ -1,6 +1,7 @@
 """Runnable scenes shipped with mlsgalerkin, one module per problem (installed as
 ``mlsgalerkin.problems``): ``hydrostatic``, ``dam_break``, ``gravity_current``,
-``drop_impact``, ``wave_maker``.
+``drop_impact``, ``wave_maker``, the periodic ``taylor_green``, ``poiseuille`` and ``couette``, and the others
+``mlsgalerkin problems`` lists.
 
 Each defines ``Parameters`` (named, with defaults), ``make_scene``, ``analyse`` and ``SMOKE``,
 and uses only the public API, so any of them is a starting point for your own case: copy it,

@@ -19,6 +19,11 @@ entry, and ``cond_1(M) <= cond_limit``.
 
 Two implementations: :func:`general_shape_kernel` (any order/dimension; optional Gram–Schmidt)
 and :func:`linear2d_shape_kernel` (2D linear, closed-form 3x3 inverse, fused loops).
+
+Periodic domains: every kernel takes ``period`` (three floats, m; ``0`` on the axes that are not
+periodic) and uses the minimum image of each offset ``x_j − x`` along the periodic axes
+(:func:`mlsgalerkin.pairs.image_component`), so a node across the seam enters the moment matrix
+at its image; with all periods zero the offsets are the plain differences, bit for bit.
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ import numpy as np
 from numba import prange
 
 from mlsgalerkin.kernels import kernel_f_df
+from mlsgalerkin.pairs import image_component
 from mlsgalerkin.polynomials import evaluate_basis
 
 _CHUNK = 64
@@ -43,11 +49,11 @@ RELATIVE_PIVOT_TOL = 1e-12
 
 
 @numba.njit(cache=True, inline="always")
-def _pair_weight(points, nodes, i, j, h, inv_hd, vol, use_vol, kid, support, dim, dw):
+def _pair_weight(points, nodes, i, j, h, inv_hd, vol, use_vol, kid, support, dim, dw, period):
     """Weight ``w_j(x_i)``; fills ``dw[:dim]`` with ``∂w/∂x``. Returns ``(w, r)``."""
     r2 = 0.0
     for k in range(dim):
-        d = points[i, k] - nodes[j, k]
+        d = image_component(points[i, k] - nodes[j, k], period[k])
         r2 += d * d
     r = math.sqrt(r2)
     hj = h[j]
@@ -57,7 +63,7 @@ def _pair_weight(points, nodes, i, j, h, inv_hd, vol, use_vol, kid, support, dim
     if r > 0.0:
         c = df * scale / (hj * r)
         for k in range(dim):
-            dw[k] = c * (points[i, k] - nodes[j, k])
+            dw[k] = c * image_component(points[i, k] - nodes[j, k], period[k])
     else:
         for k in range(dim):
             dw[k] = 0.0
@@ -146,7 +152,7 @@ def _gram_schmidt(Pn, w, n, mo, L, dvec, ok_tol):
 @numba.njit(parallel=True, cache=True)
 def general_shape_kernel(
     points, nodes, h, inv_hd, vol, use_vol, kid, support, indptr, indices, exps, sizes,
-    order_req, cond_limit, orthogonal, values, grads, order_out, cond_out,
+    order_req, cond_limit, orthogonal, values, grads, order_out, cond_out, period,
 ):
     """General path: any dimension, any order in ``sizes``; MLS/RKPM or Gram–Schmidt."""
     n_pts, dim = points.shape
@@ -188,11 +194,11 @@ def general_shape_kernel(
             dM[:, :, :] = 0.0
             for p in range(p0, p1):
                 j = indices[p]
-                w, r = _pair_weight(points, nodes, i, j, h, inv_hd, vol, use_vol, kid, support, dim, dw)
+                w, r = _pair_weight(points, nodes, i, j, h, inv_hd, vol, use_vol, kid, support, dim, dw, period)
                 values[p] = w
                 for k in range(dim):
                     grads[p, k] = dw[k]
-                    xi[k] = (nodes[j, k] - points[i, k]) / s
+                    xi[k] = image_component(nodes[j, k] - points[i, k], period[k]) / s
                 evaluate_basis(xi, exps, m, P)
                 for a in range(m):
                     for b in range(a, m):
@@ -216,7 +222,7 @@ def general_shape_kernel(
                     for p in range(p0, p1):
                         j = indices[p]
                         for k in range(dim):
-                            xi[k] = (nodes[j, k] - points[i, k]) / s
+                            xi[k] = image_component(nodes[j, k] - points[i, k], period[k]) / s
                         evaluate_basis(xi, exps, mo, tmp)
                         for a in range(mo):
                             Pn[p - p0, a] = tmp[a]
@@ -266,7 +272,7 @@ def general_shape_kernel(
             for p in range(p0, p1):
                 j = indices[p]
                 for k in range(dim):
-                    xi[k] = (nodes[j, k] - points[i, k]) / s
+                    xi[k] = image_component(nodes[j, k] - points[i, k], period[k]) / s
                 evaluate_basis(xi, exps, mo, P)
                 w = values[p]
                 if orthogonal:
@@ -289,10 +295,12 @@ def general_shape_kernel(
 @numba.njit(parallel=True, cache=True)
 def linear2d_shape_kernel(
     points, nodes, h, inv_hd, vol, use_vol, kid, support, indptr, indices, cond_limit,
-    values, grads, order_out, cond_out,
+    values, grads, order_out, cond_out, period,
 ):
     """Fused 2D linear MLS/RKPM: closed-form 3x3 inverse, Shepard inline as the fallback."""
     n_pts = points.shape[0]
+    px = period[0]
+    py = period[1]
     for i in prange(n_pts):
         p0 = indptr[i]
         p1 = indptr[i + 1]
@@ -313,8 +321,8 @@ def linear2d_shape_kernel(
         b00 = b01 = b02 = b11 = b12 = b22 = 0.0  # ∂M/∂y
         for p in range(p0, p1):
             j = indices[p]
-            dx = xi_ - nodes[j, 0]
-            dy = yi_ - nodes[j, 1]
+            dx = image_component(xi_ - nodes[j, 0], px)
+            dy = image_component(yi_ - nodes[j, 1], py)
             r = math.sqrt(dx * dx + dy * dy)
             hj = h[j]
             f, df = kernel_f_df(kid, r / hj, support, 2)
@@ -398,8 +406,8 @@ def linear2d_shape_kernel(
             gy2 = i02 * t0 + i12 * t1 + i22 * t2
             for p in range(p0, p1):
                 j = indices[p]
-                ex = (nodes[j, 0] - xi_) * inv_s
-                ey = (nodes[j, 1] - yi_) * inv_s
+                ex = image_component(nodes[j, 0] - xi_, px) * inv_s
+                ey = image_component(nodes[j, 1] - yi_, py) * inv_s
                 w = values[p]
                 cg = g0 + g1 * ex + g2 * ey
                 values[p] = cg * w
@@ -425,7 +433,7 @@ def linear2d_shape_kernel(
 
 
 @numba.njit(parallel=True, cache=True)
-def singular_shepard_kernel(points, nodes, radius, indptr, indices, exponent, values, grads, order_out):
+def singular_shepard_kernel(points, nodes, radius, indptr, indices, exponent, values, grads, order_out, period):
     r"""Interpolating Shepard with the Franke–Little weight ``w = ((R_j − r)/(R_j r))^α``.
 
     ``∂w/∂r = −α ((R_j − r)/(R_j r))^{α−1} / r²``. A point closer than ``1e-12 R_j`` to a node
@@ -444,7 +452,7 @@ def singular_shepard_kernel(points, nodes, radius, indptr, indices, exponent, va
             j = indices[p]
             r2 = 0.0
             for k in range(dim):
-                d = points[i, k] - nodes[j, k]
+                d = image_component(points[i, k] - nodes[j, k], period[k])
                 r2 += d * d
             if math.sqrt(r2) < 1e-12 * radius[j]:
                 n_coincident += 1
@@ -453,7 +461,7 @@ def singular_shepard_kernel(points, nodes, radius, indptr, indices, exponent, va
                 j = indices[p]
                 r2 = 0.0
                 for k in range(dim):
-                    d = points[i, k] - nodes[j, k]
+                    d = image_component(points[i, k] - nodes[j, k], period[k])
                     r2 += d * d
                 values[p] = 1.0 / n_coincident if math.sqrt(r2) < 1e-12 * radius[j] else 0.0
                 for k in range(dim):
@@ -465,7 +473,7 @@ def singular_shepard_kernel(points, nodes, radius, indptr, indices, exponent, va
             j = indices[p]
             r2 = 0.0
             for k in range(dim):
-                d = points[i, k] - nodes[j, k]
+                d = image_component(points[i, k] - nodes[j, k], period[k])
                 r2 += d * d
             r = math.sqrt(r2)
             R = radius[j]
@@ -475,7 +483,7 @@ def singular_shepard_kernel(points, nodes, radius, indptr, indices, exponent, va
             values[p] = w
             sw += w
             for k in range(dim):
-                g = dwdr * (points[i, k] - nodes[j, k]) / r
+                g = dwdr * image_component(points[i, k] - nodes[j, k], period[k]) / r
                 grads[p, k] = g
                 sdw[k] += g
         if not sw > 0.0:

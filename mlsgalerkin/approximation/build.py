@@ -43,6 +43,7 @@ from mlsgalerkin.approximation import _compiled
 from mlsgalerkin.approximation.table import ShapeTable
 from mlsgalerkin.kernels import Kernel, get_kernel
 from mlsgalerkin.neighbors import NeighborTable, as_coordinates, find_neighbors
+from mlsgalerkin.periodic import as_period
 from mlsgalerkin.polynomials import basis_order, basis_size, monomial_exponents
 
 __all__ = [
@@ -103,6 +104,8 @@ def shape_functions(
     condition_limit: float = DEFAULT_CONDITION_LIMIT,
     on_fallback: Literal["warn", "ignore", "raise"] = "warn",
     singular_exponent: float = 2.0,
+    period: ArrayLike | None = None,
+    lower: ArrayLike | None = None,
 ) -> ShapeTable:
     r"""Shape functions of ``nodes`` and their exact gradients at ``points``.
 
@@ -129,6 +132,11 @@ def shape_functions(
     on_fallback : ``"warn"``, ``"ignore"`` or ``"raise"``
     singular_exponent : float
         Exponent ``α`` of the singular Shepard weight.
+    period, lower : optional, one value per axis (m)
+        A periodic domain (:mod:`mlsgalerkin.periodic`): the period of each axis (``0``: not
+        periodic) and its lower end (default ``0``); points and nodes must lie in
+        ``[lower, lower + period)``. Neighbours are found across the seam and every offset
+        ``x_j − x`` is its minimum image.
 
     Returns
     -------
@@ -158,8 +166,9 @@ def shape_functions(
     if on_fallback not in ("warn", "ignore", "raise"):
         raise ValueError(f"on_fallback must be 'warn', 'ignore' or 'raise', got {on_fallback!r}")
 
+    period_a = as_period(period)
     if neighbors is None:
-        neighbors = find_neighbors(points_a, nodes_a, node_radius=kern.support * h_a)
+        neighbors = find_neighbors(points_a, nodes_a, node_radius=kern.support * h_a, period=period, lower=lower)
     elif neighbors.n_points != points_a.shape[0] or neighbors.n_nodes != n_nodes:
         raise ValueError(
             f"neighbors table is {neighbors.n_points} points x {neighbors.n_nodes} nodes, "
@@ -169,7 +178,7 @@ def shape_functions(
 
     table = evaluate_shape_functions(
         points_a, nodes_a, h_a, neighbors, kern, order, method,
-        vol if volumes is not None else None, condition_limit, singular_exponent,
+        vol if volumes is not None else None, condition_limit, singular_exponent, period=period_a,
     )
     _report_fallbacks(table, on_fallback)
     return table
@@ -199,6 +208,7 @@ def evaluate_shape_functions(
     *,
     fast: bool = True,
     out: ShapeTable | None = None,
+    period: NDArray[np.float64] | None = None,
 ) -> ShapeTable:
     """Compiled evaluation on validated arrays (no input checks; for solvers and benchmarks).
 
@@ -210,7 +220,11 @@ def evaluate_shape_functions(
     reused when they have the right size — what a time-stepping solver does every step, saving
     the first-touch page faults of fresh arrays (~0.1 s per 10⁶ points in 2D). The earlier
     table's arrays are overwritten: do not keep using it.
+
+    ``period (3,)`` (m): the periods of a periodic domain's axes (``0``: not periodic); the
+    offsets ``x_j − x`` are then minimum images (:mod:`mlsgalerkin.periodic`). Default none.
     """
+    period = as_period(period)
     kernel = get_kernel(kernel)
     order = basis_order(order)
     dim = points.shape[1]
@@ -232,19 +246,19 @@ def evaluate_shape_functions(
     if method == "singular_shepard":
         _compiled.singular_shepard_kernel(
             points, nodes, kernel.support * h, indptr, indices, float(singular_exponent),
-            values, grads, order_out,
+            values, grads, order_out, period,
         )
     else:
         inv_hd = h ** (-float(dim))
         args = (points, nodes, h, inv_hd, vol, use_vol, kernel.kernel_id, kernel.support, indptr, indices)
         if fast and dim == 2 and order == 1 and method in ("mls", "rkpm"):
-            _compiled.linear2d_shape_kernel(*args, float(condition_limit), values, grads, order_out, cond)
+            _compiled.linear2d_shape_kernel(*args, float(condition_limit), values, grads, order_out, cond, period)
         else:
             exps = monomial_exponents(dim, order)
             sizes = np.array([basis_size(dim, o) for o in range(order + 1)], dtype=np.int64)
             _compiled.general_shape_kernel(
                 *args, exps, sizes, order, float(condition_limit), method == "orthogonal",
-                values, grads, order_out, cond,
+                values, grads, order_out, cond, period,
             )
     failed = np.flatnonzero(order_out < 0)
     if failed.size:

@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 
 from mlsgalerkin.kernels import Kernel
 from mlsgalerkin.neighbors import NeighborTable
+from mlsgalerkin.periodic import as_period, minimum_image
 from mlsgalerkin.polynomials import basis_size, evaluate_basis_numpy
 
 __all__ = ["reference_shape_functions"]
@@ -25,8 +26,11 @@ def reference_shape_functions(
     order: int,
     volumes: NDArray[np.float64] | None = None,
     cond_limit: float = 1e8,
+    period: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray, NDArray, NDArray]:
-    """Per-pair ``values (n_pairs,)``, ``gradients (n_pairs, dim)`` and per-point ``order``."""
+    """Per-pair ``values (n_pairs,)``, ``gradients (n_pairs, dim)`` and per-point ``order``
+    (``period (3,)`` m: minimum-image offsets along the periodic axes; default none)."""
+    period = as_period(period)
     dim = points.shape[1]
     values = np.zeros(neighbors.n_pairs)
     grads = np.zeros((neighbors.n_pairs, dim))
@@ -34,7 +38,7 @@ def reference_shape_functions(
     for i in range(points.shape[0]):
         sl = slice(neighbors.indptr[i], neighbors.indptr[i + 1])
         j = neighbors.indices[sl]
-        dx = points[i] - nodes[j]  # (n, dim), x - x_j
+        dx = -minimum_image(nodes[j] - points[i], period)  # (n, dim), x - x_j
         r = np.linalg.norm(dx, axis=1)
         hj = h[j]
         v = volumes[j] if volumes is not None else 1.0

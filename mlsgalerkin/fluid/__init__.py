@@ -12,7 +12,8 @@ module                                 contents
 :mod:`~mlsgalerkin.fluid.integrators`  :class:`KickDriftKick`, :class:`PredictorCorrector`
 :mod:`~mlsgalerkin.fluid.effect`       the :class:`Effect` contract and its stages
 :mod:`~mlsgalerkin.fluid.scheme`       :class:`FluidScheme`: effects, approximation, integrator,
-                                       mass, safety, ``dt_max``, spacing; :class:`FluidContext`
+                                       mass, safety, ``dt_max``, spacing, periodic axes
+                                       (:class:`~mlsgalerkin.periodic.Periodic`); :class:`FluidContext`
 :mod:`~mlsgalerkin.fluid.presets`      :func:`water`: the recommended scheme for water
 :mod:`~mlsgalerkin.fluid.eos`          the Tait equation and :class:`TaitPressure`
 :mod:`~mlsgalerkin.fluid.gravity`      :class:`Gravity`
@@ -89,6 +90,7 @@ from mlsgalerkin.fluid.time_step import (
 )
 from mlsgalerkin.fluid.viscosity import BulkViscosity, NewtonianViscosity
 from mlsgalerkin.fluid.walls import Walls
+from mlsgalerkin.periodic import Periodic
 
 __all__ = [
     "BulkViscosity",
@@ -113,6 +115,7 @@ __all__ = [
     "ParticleLimitError",
     "ParticleShifting",
     "PenaltyWalls",
+    "Periodic",
     "Phase",
     "PredictorCorrector",
     "ShapeFunctionFallbackWarning",

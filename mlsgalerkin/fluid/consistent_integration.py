@@ -69,6 +69,7 @@ from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.kernels import Kernel, get_kernel, kernel_f_df
 from mlsgalerkin.pairs import pair_offset
+from mlsgalerkin.periodic import as_period, minimum_image
 
 if TYPE_CHECKING:  # pragma: no cover
     from mlsgalerkin.approximation.table import ShapeTable
@@ -80,34 +81,36 @@ FloatArray = NDArray[np.float64]
 
 
 @numba.njit(parallel=True, cache=True)
-def _shepard(x, h, volume, indptr, indices, kid, support, norm_d, out):
+def _shepard(x, h, volume, indptr, indices, kid, support, norm_d, out, period):
     n, dim = x.shape[0], x.shape[1]
     for k in prange(indptr.shape[0] - 1):
         hk = h[k]
         acc = 0.0
         for p in range(indptr[k], indptr[k + 1]):
             j = indices[p]
-            _, _, _, r2 = pair_offset(x, k, j)
+            _, _, _, r2 = pair_offset(x, k, j, period)
             f, _ = kernel_f_df(kid, np.sqrt(r2) / hk, support, dim)
             acc += f * volume[j]
         out[k] = acc * norm_d / hk**dim
 
 
-def shepard_sum(x: FloatArray, h: FloatArray, volume: FloatArray, table: "ShapeTable", kernel: Kernel) -> FloatArray:
+def shepard_sum(x: FloatArray, h: FloatArray, volume: FloatArray, table: "ShapeTable", kernel: Kernel,
+                period: FloatArray | None = None) -> FloatArray:
     """``c_k = Σ_j W(|x_k − x_j|, h_k) V_j`` over the row ``k`` of ``table`` (the point's own
-    term included), ``(n_points,)``, dimensionless."""
+    term included), ``(n_points,)``, dimensionless; ``period (3,)`` m: minimum-image distances
+    along the periodic axes (default none)."""
     dim = x.shape[1]
     out = np.empty(table.n_points)
     _shepard(x, h, volume, table.indptr, table.indices, kernel.kernel_id, kernel.support, kernel.normalisation(dim),
-             out)
+             out, as_period(period))
     return out
 
 
 def shepard_sum_reference(x: FloatArray, h: FloatArray, volume: FloatArray, table: "ShapeTable",
-                          kernel: Kernel) -> FloatArray:
+                          kernel: Kernel, period: FloatArray | None = None) -> FloatArray:
     """Numpy version of :func:`shepard_sum` (tests)."""
     rows = np.repeat(np.arange(table.n_points), np.diff(table.indptr))
-    r = np.linalg.norm(x[rows] - x[table.indices], axis=1)
+    r = np.linalg.norm(minimum_image(x[table.indices] - x[rows], as_period(period)), axis=1)
     W = kernel.value(r, h[rows], x.shape[1])
     return np.bincount(rows, W * volume[table.indices], minlength=table.n_points)
 
@@ -188,7 +191,7 @@ class ConsistentIntegration(Effect):
 
     def force(self, s: FluidState) -> None:
         volume = np.ascontiguousarray(s.volume)
-        shepard = shepard_sum(s.x, s.h, volume, s.table, self._kernel)
+        shepard = shepard_sum(s.x, s.h, volume, s.table, self._kernel, s.period)
         sv = np.ascontiguousarray(s.stress * volume[:, None, None])
         df, chi = consistency_force(s.table, volume, sv, shepard, self.none, self.full)
         f = s.fluid

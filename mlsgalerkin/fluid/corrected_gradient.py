@@ -35,6 +35,7 @@ from numpy.typing import NDArray
 
 from mlsgalerkin.kernels import kernel_f_df
 from mlsgalerkin.pairs import pair_offset
+from mlsgalerkin.periodic import as_period, minimum_image
 
 __all__ = ["GRADIENT_FIELD", "MIN_EIGENVALUE", "ratio_gradient_mls", "ratio_gradient", "ratio_gradient_reference", "symmetric_min_eigenvalue"]
 
@@ -70,7 +71,7 @@ def symmetric_min_eigenvalue(a00, a01, a02, a11, a12, a22, dim):
 
 
 @numba.njit(parallel=True, cache=True)
-def _ratio_gradient(x, ratio, volume, h, phase, indptr, indices, n_fluid, kid, support, norm_d, grad, trusted):
+def _ratio_gradient(x, ratio, volume, h, phase, indptr, indices, n_fluid, kid, support, norm_d, grad, trusted, period):
     dim = x.shape[1]
     for i in prange(n_fluid):
         # A (upper and lower triangle: A is symmetric up to round-off) and g in registers
@@ -80,7 +81,7 @@ def _ratio_gradient(x, ratio, volume, h, phase, indptr, indices, n_fluid, kid, s
             j = indices[q]
             if j == i or j >= n_fluid or phase[j] != phase[i]:
                 continue
-            d0, d1, d2, r2 = pair_offset(x, i, j)   # x_ji = x_j − x_i
+            d0, d1, d2, r2 = pair_offset(x, i, j, period)   # x_ji = x_j − x_i
             if r2 <= 0.0:
                 continue
             hij = 0.5 * (h[i] + h[j])
@@ -128,19 +129,21 @@ def _ratio_gradient(x, ratio, volume, h, phase, indptr, indices, n_fluid, kid, s
 def ratio_gradient(
     x: NDArray[np.float64], ratio: NDArray[np.float64], volume: NDArray[np.float64], h: NDArray[np.float64],
     phase: NDArray[np.int64], indptr: NDArray[np.int64], indices: NDArray[np.int32], n_fluid: int, kernel,
+    period: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """Corrected gradient ``(n_fluid, d)`` (1/m) of the density ratio ``r = ρ/ρ0`` and a
     ``(n_fluid,)`` flag of the particles where it is trusted (module docstring).
 
     ``x (n, d)`` m, ``ratio, volume (= M/ρ), h (n,)``, ``phase (n,)``, the CSR neighbour table
     of all particles against themselves (radius at least ``kernel.support · max h``); rows
-    ``>= n_fluid`` (walls) are never partners.
+    ``>= n_fluid`` (walls) are never partners. ``period (3,)`` (m): minimum-image offsets along
+    the periodic axes (:mod:`mlsgalerkin.periodic`; default none).
     """
     dim = x.shape[1]
     grad = np.zeros((n_fluid, dim))
     trusted = np.zeros(n_fluid, dtype=np.bool_)
     _ratio_gradient(x, ratio, volume, h, phase, indptr, indices, n_fluid, kernel.kernel_id, float(kernel.support),
-                    float(kernel.normalisation(dim)), grad, trusted)
+                    float(kernel.normalisation(dim)), grad, trusted, as_period(period))
     return grad, trusted
 
 
@@ -167,7 +170,7 @@ def ratio_gradient_mls(table, rho: NDArray[np.float64], rho0: NDArray[np.float64
     return grad
 
 
-def ratio_gradient_reference(x, ratio, volume, h, phase, indptr, indices, n_fluid, kernel):
+def ratio_gradient_reference(x, ratio, volume, h, phase, indptr, indices, n_fluid, kernel, period=None):
     """Numpy version of :func:`ratio_gradient` (tests)."""
     dim = x.shape[1]
     grad = np.zeros((n_fluid, dim))
@@ -176,7 +179,7 @@ def ratio_gradient_reference(x, ratio, volume, h, phase, indptr, indices, n_flui
         nb = indices[indptr[i]:indptr[i + 1]].astype(np.int64)
         nb = nb[(nb != i) & (nb < n_fluid)]
         nb = nb[phase[nb] == phase[i]]
-        xji = x[nb] - x[i]
+        xji = minimum_image(x[nb] - x[i], as_period(period))
         r = np.linalg.norm(xji, axis=1)
         hij = 0.5 * (h[i] + h[nb])
         keep = (r > 0) & (r < kernel.support * hij)

@@ -52,6 +52,7 @@ from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.fluid.time_step import density_diffusion_limit
 from mlsgalerkin.kernels import get_kernel, kernel_f_df
 from mlsgalerkin.pairs import pair_offset
+from mlsgalerkin.periodic import as_period, minimum_image
 
 __all__ = ["CORRECTIONS", "DensityDiffusion", "density_diffusion_rate", "density_diffusion_rate_reference"]
 
@@ -68,7 +69,7 @@ ETA_SQUARED = 0.01
 
 @numba.njit(parallel=True, cache=True)
 def _diffusion(x, ratio, rho0, volume, h, phase, indptr, indices, n_fluid, kid, support, norm_d, delta, c0,
-               mode, grad, gravity, gamma, out):
+               mode, grad, gravity, gamma, out, period):
     dim = x.shape[1]
     for i in prange(n_fluid):
         acc = 0.0
@@ -76,7 +77,7 @@ def _diffusion(x, ratio, rho0, volume, h, phase, indptr, indices, n_fluid, kid, 
             j = indices[q]
             if j == i or j >= n_fluid or phase[j] != phase[i]:
                 continue
-            d0, d1, d2, r2 = pair_offset(x, i, j)   # x_ji = x_j − x_i
+            d0, d1, d2, r2 = pair_offset(x, i, j, period)   # x_ji = x_j − x_i
             if r2 <= 0.0:
                 continue
             hij = 0.5 * (h[i] + h[j])
@@ -108,29 +109,32 @@ def density_diffusion_rate(
     h: NDArray[np.float64], phase: NDArray[np.int64], indptr: NDArray[np.int64], indices: NDArray[np.int32],
     n_fluid: int, kernel, delta: float, c0: float, correction: str = "gradient",
     gravity: NDArray[np.float64] | None = None, gamma: float = 7.0, grad: NDArray[np.float64] | None = None,
+    period: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """The diffusive term ``(n_fluid,)`` of ``ρ̇`` (kg/m³/s) of the fluid particles (module
     docstring). Arrays over all ``n`` particles (fluid first): ``x (n, d)`` m, ``rho, rho0``
     kg/m³, ``M`` kg, ``h`` m, ``phase``; the CSR neighbour table of the particles against
-    themselves; ``c0`` m/s; ``gravity (d,)`` m/s² for ``correction="hydrostatic"``."""
+    themselves; ``c0`` m/s; ``gravity (d,)`` m/s² for ``correction="hydrostatic"``; ``period (3,)``
+    m, the minimum image along periodic axes (:mod:`mlsgalerkin.periodic`; default none)."""
     dim = x.shape[1]
     ratio = rho / rho0
     volume = M / rho
     mode = CORRECTIONS[correction]
+    period = as_period(period)
     if mode == 0:
         if grad is None:
-            grad, _ = ratio_gradient(x, ratio, volume, h, phase, indptr, indices, n_fluid, kernel)
+            grad, _ = ratio_gradient(x, ratio, volume, h, phase, indptr, indices, n_fluid, kernel, period)
     else:
         grad = np.zeros((n_fluid, dim))
     g = np.zeros(3) if gravity is None else np.concatenate([np.asarray(gravity, dtype=float), np.zeros(3 - dim)])
     out = np.empty(n_fluid)
     _diffusion(x, ratio, rho0, volume, h, phase, indptr, indices, n_fluid, kernel.kernel_id, float(kernel.support),
-               float(kernel.normalisation(dim)), float(delta), float(c0), mode, grad, g, float(gamma), out)
+               float(kernel.normalisation(dim)), float(delta), float(c0), mode, grad, g, float(gamma), out, period)
     return out
 
 
 def density_diffusion_rate_reference(x, rho, rho0, M, h, phase, indptr, indices, n_fluid, kernel, delta, c0,
-                                     correction="gradient", gravity=None, gamma=7.0):
+                                     correction="gradient", gravity=None, gamma=7.0, period=None):
     """Numpy version of :func:`density_diffusion_rate` (tests)."""
     from mlsgalerkin.fluid.corrected_gradient import ratio_gradient_reference
 
@@ -138,13 +142,13 @@ def density_diffusion_rate_reference(x, rho, rho0, M, h, phase, indptr, indices,
     ratio = rho / rho0
     volume = M / rho
     if correction == "gradient":
-        grad, _ = ratio_gradient_reference(x, ratio, volume, h, phase, indptr, indices, n_fluid, kernel)
+        grad, _ = ratio_gradient_reference(x, ratio, volume, h, phase, indptr, indices, n_fluid, kernel, period)
     out = np.zeros(n_fluid)
     for i in range(n_fluid):
         nb = indices[indptr[i]:indptr[i + 1]].astype(np.int64)
         nb = nb[(nb != i) & (nb < n_fluid)]
         nb = nb[phase[nb] == phase[i]]
-        xji = x[nb] - x[i]
+        xji = minimum_image(x[nb] - x[i], as_period(period))
         r = np.linalg.norm(xji, axis=1)
         hij = 0.5 * (h[i] + h[nb])
         keep = (r > 0) & (r < kernel.support * hij)
@@ -213,7 +217,7 @@ class DensityDiffusion(Effect):
             grad = ratio_gradient_mls(s.table, s.rho, s.rho0, s.p, s.n_fluid, self.c0, self._gamma)
         elif self.correction == "gradient":
             grad, _ = ratio_gradient(s.x, s.rho / s.rho0, s.M / s.rho, s.h, s.phase, nb.indptr, nb.indices,
-                                     s.n_fluid, self._kernel)
+                                     s.n_fluid, self._kernel, s.period)
         if grad is not None:
             full = s.extra.get(GRADIENT_FIELD)
             if full is None or full.shape != s.x.shape:
@@ -221,7 +225,7 @@ class DensityDiffusion(Effect):
             full[s.fluid] = grad
         rate = density_diffusion_rate(
             s.x, s.rho, s.rho0, s.M, s.h, s.phase, nb.indptr, nb.indices, s.n_fluid, self._kernel,
-            self.delta, self.c0, self.correction, s.gravity, self._gamma, grad=grad,
+            self.delta, self.c0, self.correction, s.gravity, self._gamma, grad=grad, period=s.period,
         )
         s.drho[s.fluid] += rate
 

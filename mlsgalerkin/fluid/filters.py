@@ -21,6 +21,7 @@ from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.kernels import get_kernel, kernel_f_df
 from mlsgalerkin.pairs import pair_offset
+from mlsgalerkin.periodic import as_period
 
 __all__ = ["DensityFilter", "mls_ratio_filter", "mls_ratio_filter_reference", "shepard_ratio_filter"]
 
@@ -41,7 +42,7 @@ def _mls_filter(indptr, indices, values, rho, rho0, n_fluid, out):
 
 
 @numba.njit(parallel=True, cache=True)
-def _shepard_filter(indptr, indices, x, rho, rho0, M, h, n_fluid, kid, support, out):
+def _shepard_filter(indptr, indices, x, rho, rho0, M, h, n_fluid, kid, support, out, period):
     dim = x.shape[1]
     for i in prange(n_fluid):
         s = 0.0
@@ -50,7 +51,7 @@ def _shepard_filter(indptr, indices, x, rho, rho0, M, h, n_fluid, kid, support, 
             j = indices[q]
             if j >= n_fluid:
                 continue
-            _, _, _, r2 = pair_offset(x, i, j)
+            _, _, _, r2 = pair_offset(x, i, j, period)
             w, _ = kernel_f_df(kid, np.sqrt(r2) / h[j], support, dim)
             w *= M[j] / rho[j] / h[j] ** dim
             s += w * rho[j] / rho0[j]
@@ -65,11 +66,13 @@ def mls_ratio_filter(table, rho: np.ndarray, rho0: np.ndarray, n_fluid: int) -> 
     rho[:n_fluid] = out
 
 
-def shepard_ratio_filter(neighbors, x, rho, rho0, M, h, n_fluid: int, kernel) -> None:
-    """Shepard filter of ``ρ/ρ0`` with kernel weights (in place on ``rho``)."""
+def shepard_ratio_filter(neighbors, x, rho, rho0, M, h, n_fluid: int, kernel, period=None) -> None:
+    """Shepard filter of ``ρ/ρ0`` with kernel weights (in place on ``rho``; ``period (3,)`` m:
+    minimum-image distances along the periodic axes, default none)."""
     k = get_kernel(kernel)
     out = np.empty(n_fluid)
-    _shepard_filter(neighbors.indptr, neighbors.indices, x, rho, rho0, M, h, n_fluid, k.kernel_id, k.support, out)
+    _shepard_filter(neighbors.indptr, neighbors.indices, x, rho, rho0, M, h, n_fluid, k.kernel_id, k.support, out,
+                    as_period(period))
     rho[:n_fluid] = out
 
 
@@ -121,7 +124,7 @@ class DensityFilter(Effect):
         if self.method == "mls":
             mls_ratio_filter(s.table, s.rho, s.rho0, s.n_fluid)
         else:
-            shepard_ratio_filter(s.neighbors, s.x, s.rho, s.rho0, s.M, s.h, s.n_fluid, self._kernel)
+            shepard_ratio_filter(s.neighbors, s.x, s.rho, s.rho0, s.M, s.h, s.n_fluid, self._kernel, s.period)
         self.applied += 1
 
     def summary(self) -> dict[str, Any]:

@@ -72,6 +72,7 @@ from numpy.typing import ArrayLike, NDArray
 from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.pairs import pair_offset
+from mlsgalerkin.periodic import as_period, minimum_image
 from mlsgalerkin.neighbors import NeighborTable, as_coordinates
 
 __all__ = [
@@ -135,7 +136,7 @@ def _test_directions(n_test_points: int) -> FloatArray:
 
 
 @numba.njit(parallel=True, cache=True)
-def _circle_coverage_kernel(x, indptr, indices, radius, dirs):
+def _circle_coverage_kernel(x, indptr, indices, radius, dirs, period):
     n = x.shape[0]
     nt = dirs.shape[0]
     r2 = radius * radius
@@ -153,7 +154,7 @@ def _circle_coverage_kernel(x, indptr, indices, radius, dirs):
                 j = indices[p]
                 if j == i:
                     continue
-                dx, dy, _, rr = pair_offset(x, i, j)
+                dx, dy, _, rr = pair_offset(x, i, j, period)
                 if rr < reach2:
                     rel[m, 0] = dx
                     rel[m, 1] = dy
@@ -188,6 +189,7 @@ def detect_circle_coverage(
     spacing: float,
     radius_factor: float = 1.05,
     n_test_points: int = 360,
+    period: ArrayLike | None = None,
 ) -> BoolArray:
     """Free-surface flags by the 2D circle-coverage test, ``(n,)`` bool (True = surface).
 
@@ -199,6 +201,7 @@ def detect_circle_coverage(
     spacing : initial particle spacing ``r0``, m.
     radius_factor : circle radius ``r = radius_factor * r0`` (Koh et al. 2012: 1.05).
     n_test_points : points on each circle, evenly spaced from angle 0 (Koh et al. 2012: 360).
+    period : optional (3,) periods (m) of the periodic axes, 0 for the others (minimum-image offsets).
     """
     x, indptr, indices, radius = _check_inputs(positions, neighbors, spacing, radius_factor)
     if x.shape[1] != 2:
@@ -206,7 +209,7 @@ def detect_circle_coverage(
             f"the circle-coverage test is two-dimensional; positions have dimension {x.shape[1]}. "
             "Use method='cheap' (detect_neighbour_deficit) in other dimensions"
         )
-    return _circle_coverage_kernel(x, indptr, indices, radius, _test_directions(n_test_points))
+    return _circle_coverage_kernel(x, indptr, indices, radius, _test_directions(n_test_points), as_period(period))
 
 
 def detect_circle_coverage_reference(
@@ -245,7 +248,7 @@ def detect_circle_coverage_reference(
 
 
 @numba.njit(parallel=True, cache=True)
-def _indicator_kernel(x, indptr, indices, cutoff):
+def _indicator_kernel(x, indptr, indices, cutoff, period):
     n, dim = x.shape
     counts = np.zeros(n, dtype=np.int64)
     asym = np.ones(n)
@@ -260,7 +263,7 @@ def _indicator_kernel(x, indptr, indices, cutoff):
             j = indices[p]
             if j == i:
                 continue
-            d0, d1, d2, rr = pair_offset(x, i, j)   # x_ji = x_j − x_i
+            d0, d1, d2, rr = pair_offset(x, i, j, period)   # x_ji = x_j − x_i
             if rr >= c2:
                 continue
             r = math.sqrt(rr)
@@ -282,15 +285,17 @@ def surface_indicators(
     neighbors: NeighborTable,
     spacing: float,
     radius_factor: float = 1.05,
+    period: ArrayLike | None = None,
 ) -> tuple[NDArray[np.int64], FloatArray]:
     """Neighbour count ``N_i`` and asymmetry ``s_i`` of the cheap screen (module docstring).
 
     Returns ``(counts (n,) int64, asymmetry (n,) float in [0, 1])``, counting neighbours
     ``j != i`` with ``|x_j - x_i| < R_c = 2 * radius_factor * spacing``; ``s_i = 1`` for a
-    particle without neighbours. Any dimension 1–3.
+    particle without neighbours. Any dimension 1–3. ``period (3,)`` m: minimum-image offsets
+    along the periodic axes (default none).
     """
     x, indptr, indices, radius = _check_inputs(positions, neighbors, spacing, radius_factor)
-    return _indicator_kernel(x, indptr, indices, 2.0 * radius)
+    return _indicator_kernel(x, indptr, indices, 2.0 * radius, as_period(period))
 
 
 def surface_indicators_reference(
@@ -298,6 +303,7 @@ def surface_indicators_reference(
     neighbors: NeighborTable,
     spacing: float,
     radius_factor: float = 1.05,
+    period: ArrayLike | None = None,
 ) -> tuple[NDArray[np.int64], FloatArray]:
     """numpy reference of :func:`surface_indicators`."""
     x, indptr, indices, radius = _check_inputs(positions, neighbors, spacing, radius_factor)
@@ -305,7 +311,7 @@ def surface_indicators_reference(
     cutoff = 2.0 * radius
     rows = np.repeat(np.arange(n), np.diff(indptr))
     cols = indices.astype(np.int64)
-    d = x[cols] - x[rows]
+    d = minimum_image(x[cols] - x[rows], as_period(period))
     r = np.sqrt(np.einsum("pd,pd->p", d, d))
     keep = (cols != rows) & (r < cutoff)
     rows, d, r = rows[keep], d[keep], r[keep]
@@ -328,6 +334,7 @@ def detect_neighbour_deficit(
     beta: float = 0.96,
     asymmetry_threshold: float = 0.22,
     sparse_fraction: float = 0.5,
+    period: ArrayLike | None = None,
 ) -> BoolArray:
     """Free-surface flags by the cheap count + asymmetry screen, ``(n,)`` bool, any dimension.
 
@@ -335,7 +342,8 @@ def detect_neighbour_deficit(
     ``s_i > asymmetry_threshold``), with ``N_i``, ``s_i`` from :func:`surface_indicators` and
     ``N_0 = n_reference`` or, if omitted, the median of ``N_i`` over the particles with
     ``s_i <= asymmetry_threshold`` (the maximum count if there are none). See the module
-    docstring for the choice of the defaults. ``positions`` (n, d) in m, ``spacing`` = ``r0`` in m.
+    docstring for the choice of the defaults. ``positions`` (n, d) in m, ``spacing`` = ``r0`` in m;
+    ``period (3,)`` m: minimum-image offsets along the periodic axes (default none).
     """
     if not 0.0 < float(beta) <= 2.0:
         raise ValueError(f"beta must be in (0, 2], got {beta}")
@@ -343,7 +351,7 @@ def detect_neighbour_deficit(
         raise ValueError(f"asymmetry_threshold must be in [0, 1), got {asymmetry_threshold}")
     if not 0.0 <= float(sparse_fraction) <= float(beta):
         raise ValueError(f"sparse_fraction must be in [0, beta], got {sparse_fraction}")
-    counts, asym = surface_indicators(positions, neighbors, spacing, radius_factor)
+    counts, asym = surface_indicators(positions, neighbors, spacing, radius_factor, period)
     if n_reference is None:
         calm = asym <= asymmetry_threshold  # the likely interior
         n0 = float(np.median(counts[calm])) if calm.any() else float(counts.max())
@@ -414,7 +422,7 @@ class FreeSurfaceDetection(Effect):
     def after_step(self, s: FluidState) -> None:
         if s.step % self.every and s.step > 1:
             return
-        flags = detect_free_surface(s.x, s.neighbors, s.spacing, method=self.method)
+        flags = detect_free_surface(s.x, s.neighbors, s.spacing, method=self.method, period=s.period)
         flags[s.walls] = False
         s.extra["free_surface"] = flags
         self.count = int(np.count_nonzero(flags))

@@ -63,6 +63,7 @@ from mlsgalerkin.fluid.time_step import pair_viscosity_limit
 from mlsgalerkin.kernels import Kernel, get_kernel, kernel_f_df
 from mlsgalerkin.neighbors import NeighborTable, as_coordinates
 from mlsgalerkin.pairs import pair_offset
+from mlsgalerkin.periodic import as_period, minimum_image
 
 __all__ = [
     "MonaghanViscosity",
@@ -147,7 +148,7 @@ def _prepare(
 
 @numba.njit(parallel=True, cache=True)
 def _monaghan_kernel(
-    x, v, rho, c, m, h, indptr, indices, kid, support, norm_d, alpha, beta, active, L, use_l
+    x, v, rho, c, m, h, indptr, indices, kid, support, norm_d, alpha, beta, active, L, use_l, period
 ):
     n, dim = x.shape
     force = np.zeros((n, dim))
@@ -165,7 +166,7 @@ def _monaghan_kernel(
             j = indices[p]
             if j == i:
                 continue
-            dx, dy, dz, r2 = pair_offset(x, i, j)   # x_ji; x_ij is its negation (exact)
+            dx, dy, dz, r2 = pair_offset(x, i, j, period)   # x_ji; x_ij is its negation (exact)
             dx, dy, dz = -dx, -dy, -dz
             vx = (v[i, 0] - v[j, 0]) * dx
             if dim > 1:
@@ -221,6 +222,7 @@ def monaghan_viscosity_force(
     beta: float = 0.0,
     active: ArrayLike | None = None,
     gradient: ArrayLike | None = None,
+    period: ArrayLike | None = None,
 ) -> tuple[FloatArray, float]:
     """Artificial-viscosity force ``f_i = −Σ_j M_i M_j Π_ij ∇_i W_ij`` and ``max |φ_ij|``.
 
@@ -240,6 +242,8 @@ def monaghan_viscosity_force(
     gradient : optional (n, d, d) velocity gradient ``L`` (1/s): the pair velocity difference is
         replaced by its deviation from the linear field, ``w_ij = v_ij − ½(L_i + L_j) x_ij``
         (:class:`MonaghanViscosity` with ``residual=True``).
+    period : optional (3,) periods (m) of the periodic axes, 0 for the others
+        (:mod:`mlsgalerkin.periodic`); pair offsets are then minimum images.
 
     Returns
     -------
@@ -256,7 +260,7 @@ def monaghan_viscosity_force(
     L = np.ascontiguousarray(gradient, dtype=float) if use_l else np.zeros((1, dim, dim))
     force, row_phi = _monaghan_kernel(
         x, v, rho, c, m, hh, indptr, indices, k.kernel_id, float(k.support),
-        float(k.normalisation(dim)), alpha, beta, act, L, use_l,
+        float(k.normalisation(dim)), alpha, beta, act, L, use_l, as_period(period),
     )
     return force, float(row_phi.max()) if row_phi.size else 0.0
 
@@ -274,6 +278,7 @@ def monaghan_viscosity_force_reference(
     beta: float = 0.0,
     active: ArrayLike | None = None,
     gradient: ArrayLike | None = None,
+    period: ArrayLike | None = None,
 ) -> tuple[FloatArray, float]:
     """numpy reference of :func:`monaghan_viscosity_force` (vectorised over pairs)."""
     x, v, rho, c, m, hh, indptr, indices, k, alpha, beta, act = _prepare(
@@ -282,7 +287,7 @@ def monaghan_viscosity_force_reference(
     n, dim = x.shape
     rows = np.repeat(np.arange(n), np.diff(indptr))
     cols = indices.astype(np.int64)
-    dx = x[rows] - x[cols]
+    dx = -minimum_image(x[cols] - x[rows], as_period(period))
     dv = v[rows] - v[cols]
     if gradient is not None:
         Lg = np.asarray(gradient, dtype=float)
@@ -403,7 +408,7 @@ class MonaghanViscosity(Effect):
         f, row_phi = _monaghan_kernel(
             s.x, s.v, s.rho, s.c, s.M, s.h, s.neighbors.indptr, s.neighbors.indices, k.kernel_id,
             float(k.support), float(k.normalisation(s.dim)), float(self.alpha), float(self.beta), self._active,
-            L, self.residual,
+            L, self.residual, s.period,
         )
         self.max_phi = float(row_phi.max()) if row_phi.size else 0.0
         s.force[s.fluid] += f[s.fluid]

@@ -41,6 +41,7 @@ from numba import prange
 from numpy.typing import NDArray
 
 from mlsgalerkin.pairs import pair_offset
+from mlsgalerkin.periodic import as_period
 
 __all__ = ["CELL_TOLERANCE", "PENETRATION_WARNING", "penetration_depths", "penetration_depths_reference",
            "surface_offsets"]
@@ -77,7 +78,7 @@ def surface_offsets(positions: NDArray[np.float64], normals: NDArray[np.float64]
 
 
 @numba.njit(parallel=True, cache=True)
-def _depths(indptr, indices, x, n_fluid, normals, offsets, half, out):
+def _depths(indptr, indices, x, n_fluid, normals, offsets, half, out, period):
     dim = x.shape[1]
     for i in prange(n_fluid):
         best = np.inf
@@ -87,7 +88,7 @@ def _depths(indptr, indices, x, n_fluid, normals, offsets, half, out):
             if j < n_fluid:
                 continue
             w = j - n_fluid
-            d0, d1, d2, r2 = pair_offset(x, i, j)   # x_ji; x_ij = −x_ji (exact), so x_ij · n = −x_ji · n
+            d0, d1, d2, r2 = pair_offset(x, i, j, period)   # x_ji; x_ij = −x_ji (exact), so x_ij · n = −x_ji · n
             dot = -(d0 * normals[w, 0])
             if dim > 1:
                 dot -= d1 * normals[w, 1]
@@ -109,15 +110,17 @@ def _depths(indptr, indices, x, n_fluid, normals, offsets, half, out):
 
 def penetration_depths(indptr: NDArray[np.int64], indices: NDArray[np.int32], x: NDArray[np.float64],
                        n_fluid: int, normals: NDArray[np.float64], offsets: NDArray[np.float64],
-                       spacing: float | None = None) -> NDArray[np.float64]:
+                       spacing: float | None = None, period: NDArray[np.float64] | None = None
+                       ) -> NDArray[np.float64]:
     """Depth ``(n_fluid,)`` (m) of each fluid particle behind the surface of its nearest wall
     particle (0 if in front of it, or without a wall neighbour). ``indptr, indices``: the
     neighbour table of all particles (fluid first); ``x (n, d)``; ``normals (n_w, d)`` and
     ``offsets (n_w,)`` of the wall particles ``n_fluid …``. With the wall's ``spacing`` (m), only
     a particle inside the cell of its nearest wall particle counts (module docstring); without
-    it, every particle behind the plane of the nearest wall particle's surface."""
+    it, every particle behind the plane of the nearest wall particle's surface. ``period (3,)``
+    m: minimum-image offsets along the periodic axes (default none)."""
     out = np.empty(n_fluid)
-    _depths(indptr, indices, x, n_fluid, normals, offsets, _half_cell(spacing), out)
+    _depths(indptr, indices, x, n_fluid, normals, offsets, _half_cell(spacing), out, as_period(period))
     return out
 
 

@@ -25,6 +25,7 @@ from mlsgalerkin.fluid.effect import Effect
 from mlsgalerkin.fluid.integrators import make_integrator
 from mlsgalerkin.fluid.mass import MASS_OPTIONS
 from mlsgalerkin.io.files import to_jsonable
+from mlsgalerkin.periodic import Periodic
 
 __all__ = ["FluidContext", "FluidScheme", "SPACING_TOLERANCE"]
 
@@ -56,6 +57,11 @@ class FluidScheme(Scheme):
     spacing : float, optional
         The particle spacing ``Δx`` (m) the fluid bodies were built with; checked against every
         fluid and wall body (``None``: the fluid bodies' own, which must agree).
+    periodic : Periodic, optional
+        The axes along which the domain repeats (:class:`~mlsgalerkin.periodic.Periodic`, e.g.
+        ``Periodic(x=(0.0, L))``): neighbours, shape functions and every pair term see across
+        the seam (minimum-image offsets) and the fluid particles wrap back into the box after
+        each drift. ``None`` (default): no periodic axis.
     """
 
     solver: ClassVar[str] = "mlsgalerkin.fluid.solver:FluidSolver"
@@ -67,6 +73,7 @@ class FluidScheme(Scheme):
     safety: float = 1.0
     dt_max: float | None = None
     spacing: float | None = None
+    periodic: Periodic | None = None
 
     def __post_init__(self) -> None:
         self.effects = list(self.effects)
@@ -86,6 +93,8 @@ class FluidScheme(Scheme):
             out.append(f"mass must be 'lumped', 'particle' or 'consistent', got {self.mass!r}")
         if self.spacing is not None and not (isinstance(self.spacing, (int, float)) and self.spacing > 0):
             out.append(f"spacing must be positive (the particle spacing, m), got {self.spacing!r}")
+        if self.periodic is not None and not isinstance(self.periodic, Periodic):
+            out.append(f"periodic must be a Periodic (e.g. Periodic(x=(0.0, 1.0))) or None, got {self.periodic!r}")
         if isinstance(self.approximation, Approximation):
             out.extend(self.approximation.problems())
         else:
@@ -108,6 +117,8 @@ class FluidScheme(Scheme):
             "integrator": str(getattr(self.integrator, "name", self.integrator)),
             "mass": self.mass, "safety": self.safety, "dt_max": self.dt_max,
         }
+        if self.periodic is not None:  # only then: the identity of a run without periodic axes is unchanged
+            out["periodic"] = self.periodic.identity()
         return out  # the spacing is checked against the bodies, whose initial state the identity hashes
 
 

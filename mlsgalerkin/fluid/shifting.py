@@ -80,13 +80,14 @@ from mlsgalerkin.fluid.effect import Effect, EffectContext, check_positive
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.kernels import get_kernel, kernel_f_df
 from mlsgalerkin.pairs import pair_offset
+from mlsgalerkin.periodic import as_period, minimum_image
 
 __all__ = ["ParticleShifting", "shift_vectors", "shift_vectors_reference"]
 
 
 @numba.njit(parallel=True, cache=True)
 def _shift(x, volume, h, indptr, indices, n_fluid, kid, support, norm_d, w_dx_f, coef, R, npow, splash, surface,
-           max_shift, out, lam_out, kind, normal, wet):
+           max_shift, out, lam_out, kind, normal, wet, period):
     dim = x.shape[1]
     for i in prange(n_fluid):
         a00 = a01 = a02 = a11 = a12 = a22 = 0.0
@@ -96,7 +97,7 @@ def _shift(x, volume, h, indptr, indices, n_fluid, kid, support, norm_d, w_dx_f,
             j = indices[q]
             if j == i:
                 continue
-            d0, d1, d2, r2 = pair_offset(x, i, j)   # x_ji = x_j − x_i
+            d0, d1, d2, r2 = pair_offset(x, i, j, period)   # x_ji = x_j − x_i
             if r2 <= 0.0:
                 continue
             hij = 0.5 * (h[i] + h[j])
@@ -176,14 +177,14 @@ def shift_vectors(
     indices: NDArray[np.int32], n_fluid: int, kernel, spacing: float, speed: float | NDArray[np.float64],
     dt: float, *,
     beta: float = 1.0, R: float = 0.2, n: int = 4, splash: float = 0.4, surface: float = 0.9,
-    max_shift: float = 0.1,
+    max_shift: float = 0.1, period: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int8]]:
     """Shift ``δr (n_fluid, d)`` (m) of each fluid particle for a step ``dt`` (s), the smallest
     eigenvalue ``λ (n_fluid,)`` and the kind of each particle (0 interior, 1 surface —
     normal component removed, 2 splash — not shifted; +3 where the length was limited to
     ``max_shift · spacing``). ``x (n, d)``, ``volume = M/ρ``, ``h (n,)`` over all particles
     (walls are partners); ``speed`` the speed ``U`` (m/s): a number, or one per fluid particle
-    ``(n_fluid,)``."""
+    ``(n_fluid,)``; ``period (3,)`` m: minimum-image offsets along the periodic axes (default none)."""
     dim = x.shape[1]
     out = np.zeros((n_fluid, dim))
     lam = np.zeros(n_fluid)
@@ -194,12 +195,12 @@ def shift_vectors(
     _shift(x, volume, h, indptr, indices, n_fluid, kernel.kernel_id, float(kernel.support),
            float(kernel.normalisation(dim)), float(w_dx_f), np.ascontiguousarray(coef), float(R), int(n),
            float(splash), float(surface), np.full(n_fluid, max_shift * spacing), out, lam, kind,
-           np.zeros((n_fluid, 3)), np.zeros(n_fluid, dtype=np.bool_))
+           np.zeros((n_fluid, 3)), np.zeros(n_fluid, dtype=np.bool_), as_period(period))
     return out, lam, kind
 
 
 def shift_vectors_reference(x, volume, h, indptr, indices, n_fluid, kernel, spacing, speed, dt, *, beta=1.0, R=0.2,
-                            n=4, splash=0.4, surface=0.9, max_shift=0.1):
+                            n=4, splash=0.4, surface=0.9, max_shift=0.1, period=None):
     """Numpy version of :func:`shift_vectors` (tests)."""
     dim = x.shape[1]
     out = np.zeros((n_fluid, dim))
@@ -211,7 +212,7 @@ def shift_vectors_reference(x, volume, h, indptr, indices, n_fluid, kernel, spac
     for i in range(n_fluid):
         nb = indices[indptr[i]:indptr[i + 1]].astype(np.int64)
         nb = nb[nb != i]
-        xji = x[nb] - x[i]
+        xji = minimum_image(x[nb] - x[i], as_period(period))
         r = np.linalg.norm(xji, axis=1)
         hij = 0.5 * (h[i] + h[nb])
         keep = (r > 0) & (r < kernel.support * hij)
@@ -324,7 +325,7 @@ class ParticleShifting(Effect):
         shift, _, kind = shift_vectors(
             s.x, volume, s.h, nb.indptr, nb.indices, s.n_fluid, self._kernel, s.spacing, speed, dt,
             beta=self.beta, R=self.R, n=self.n, splash=self.splash, surface=self.surface,
-            max_shift=self.max_shift,
+            max_shift=self.max_shift, period=s.period,
         )
         known = s.extra.get(GRADIENT_FIELD)
         if known is not None and known.shape == s.x.shape:
@@ -333,7 +334,7 @@ class ParticleShifting(Effect):
             grad = ratio_gradient_mls(s.table, s.rho, s.rho0, s.p, s.n_fluid, self._c0, self._gamma)
         else:
             grad, _ = ratio_gradient(s.x, s.rho / s.rho0, volume, s.h, s.phase, nb.indptr, nb.indices, s.n_fluid,
-                                     self._kernel)
+                                     self._kernel, s.period)
         s.rho[f] += s.rho0[f] * np.einsum("id,id->i", grad, shift)
         s.v[f] += np.einsum("iab,ib->ia", s.L[f], shift)
         s.x[f] += shift

@@ -54,6 +54,7 @@ from mlsgalerkin.fluid.time_step import force_limit
 from mlsgalerkin.io.files import to_jsonable
 from mlsgalerkin.kernels import get_kernel
 from mlsgalerkin.neighbors import find_neighbors
+from mlsgalerkin.periodic import Periodic, kernel_period, minimum_image
 
 __all__ = ["FluidSolver", "MachNumberWarning", "ParticleClumpingWarning", "ShapeFunctionFallbackWarning",
            "StageTimer", "VolumeErrorWarning", "WallPenetrationWarning", "build_state"]
@@ -166,6 +167,8 @@ class FluidSolver(Solver):
         if len(spacings) > 1:
             out.append(f"fluid bodies must share one particle spacing, got {sorted(spacings)}")
         out.extend(cls._spacing_problems(bodies, scheme, fluids))
+        if isinstance(scheme.periodic, Periodic) and fluids and len({b.dim for b in bodies}) == 1:
+            out.extend(cls._periodic_problems(bodies, scheme, fluids))
         for w in (b for b in bodies if isinstance(b, WallBody) and b.motion is not None):
             out.extend(f"wall body {w.name!r}: {p}" for p in w.motion.check(w.dim))
         if fluids and len({b.dim for b in bodies}) == 1:
@@ -249,6 +252,47 @@ class FluidSolver(Solver):
                            f"spacing {dx:g} (wall_box(..., {dx:g}), WallBody.on_surface(..., spacing={dx:g}))")
         return out
 
+    @staticmethod
+    def _periodic_problems(bodies: list, scheme: FluidScheme, fluids: list) -> list[str]:
+        """The periodic box against the bodies: the description itself, every particle inside
+        ``[lower, upper)`` on the periodic axes, no wall that moves (its particles would leave the
+        box; a belt's surface velocity is fine), and a period of at least twice the neighbour
+        search radius (a particle would otherwise meet another and its image)."""
+        per = scheme.periodic
+        dim = fluids[0].dim
+        out = per.problems(dim)
+        if out:
+            return out
+        period, lower = per.period(dim), per.lower(dim)
+        ap = scheme.approximation
+        try:
+            reach = get_kernel(ap.kernel).support * ap.h_factor * fluids[0].spacing + ap.skin * fluids[0].spacing
+        except (ValueError, TypeError, AttributeError):
+            reach = 0.0  # reported by the approximation's own check
+        for a in per.axes(dim):
+            name = "xyz"[a]
+            if period[a] < 2.0 * reach:
+                out.append(f"the periodic length along {name} ({period[a]:g} m) is shorter than twice the neighbour "
+                           f"search radius ({reach:g} m = kernel support × h + skin): a particle would meet another "
+                           f"and its image; lengthen the periodic box to at least {2.0 * reach:g} m")
+            for b in bodies:
+                if not (isinstance(b, (FluidBody, WallBody)) and b.n):
+                    continue
+                x = b.positions[:, a]
+                if x.min() < lower[a] or x.max() >= lower[a] + period[a]:
+                    out.append(f"body {b.name!r} reaches from {x.min():g} to {x.max():g} m along {name}, outside "
+                               f"the periodic interval [{lower[a]:g}, {lower[a] + period[a]:g}) m: build it inside "
+                               "the box (upper end excluded), or widen the interval")
+        for w in bodies:
+            if isinstance(w, WallBody) and (w.motion is not None or w.follows is not None):
+                out.append(f"wall body {w.name!r} moves, but the domain is periodic: its particles would leave the "
+                           "periodic box; give a wall that stays in place a surface velocity (WallBody(velocity=...)) "
+                           "instead")
+            if isinstance(w, WallBody) and w.surface is not None:
+                out.append(f"wall body {w.name!r} has a penalty surface, which does not see across the periodic "
+                           "seam; build the walls of a periodic domain without a surface")
+        return out
+
     # ------------------------------------------------------------------ set-up
     def __init__(self, bodies: list, scheme: FluidScheme, scene: SceneView) -> None:
         self.scheme = scheme
@@ -263,6 +307,9 @@ class FluidSolver(Solver):
         self._state = build_state(self.fluids, self.walls, ap.h_factor)
         s = self._state
         s.approximation_order = ap.order
+        self.periodic = scheme.periodic
+        s.period = kernel_period(self.periodic, s.dim)
+        self._lower = self.periodic.lower(s.dim) if self.periodic is not None else None
         self.search_radius = self.kernel.support * s.h + ap.skin * s.spacing
         self._stage_effects = {st: [e for e in self.effects if st in e.stages] for st in STAGES}
         self.timer = StageTimer()
@@ -380,16 +427,28 @@ class FluidSolver(Solver):
         if s.neighbors is not None:
             rows = slice(0, s.n) if (self._moving or self._driven) else s.fluid
             disp = s.x[rows] - s.x_ref[rows]
+            if self.periodic is not None:  # a particle wrapped across the seam moved by its image
+                disp = minimum_image(disp, s.period)
             moved = float(np.sqrt(np.max(np.einsum("ij,ij->i", disp, disp)))) if disp.shape[0] else 0.0
             if moved <= 0.5 * self.approximation.skin * s.spacing:
                 return
             s.x_ref = s.x.copy()
-        s.neighbors = find_neighbors(s.x_ref, s.x_ref, radius=self.search_radius)
+        s.neighbors = self._find_neighbors()
         self.neighbor_builds += 1
         self.timer.add("neighbors", t0)
 
+    def _find_neighbors(self):
+        """The neighbour table of the reference positions (across the seam of a periodic box)."""
+        s = self._state
+        if self.periodic is None:
+            return find_neighbors(s.x_ref, s.x_ref, radius=self.search_radius)
+        return find_neighbors(s.x_ref, s.x_ref, radius=self.search_radius, period=s.period, lower=self._lower)
+
     def kinematics(self) -> None:
-        """Neighbours, shape functions, wall velocities, velocity gradient, continuity rate."""
+        """Neighbours, shape functions, wall velocities, velocity gradient, continuity rate
+        (in a periodic box the fluid particles first wrap back into it)."""
+        if self.periodic is not None:
+            self.periodic.wrap(self._state.x[self._state.fluid])
         self._neighbors()
         t0 = time.perf_counter()
         self._shape_functions()
@@ -412,7 +471,7 @@ class FluidSolver(Solver):
             self._table_volumes = None
         s.table = evaluate_shape_functions(
             s.x, s.x, s.h, s.neighbors, self.kernel, s.approximation_order, ap.method, self._table_volumes,
-            condition_limit=ap.condition_limit, out=s.table,
+            condition_limit=ap.condition_limit, out=s.table, period=s.period,
         )
         s.fallback_count = int(np.count_nonzero(s.table.order[: s.n_fluid] < s.approximation_order))
 
@@ -568,7 +627,8 @@ class FluidSolver(Solver):
         :data:`~mlsgalerkin.fluid.penetration.PENETRATION_WARNING` spacings."""
         s = self._state
         nb = s.neighbors
-        depth = penetration_depths(nb.indptr, nb.indices, s.x, s.n_fluid, s.wall_normals, self._offsets, s.spacing)
+        depth = penetration_depths(nb.indptr, nb.indices, s.x, s.n_fluid, s.wall_normals, self._offsets, s.spacing,
+                                   s.period)
         deepest = float(depth.max()) / s.spacing if depth.size else 0.0
         count = int(np.count_nonzero(depth > 0.0))
         s.wall_penetrations, s.max_wall_penetration_dx = count, deepest
@@ -682,7 +742,7 @@ class FluidSolver(Solver):
         s.x[:] = x_walls
         # rebuild the neighbour list from the reference positions it was built from, so the
         # skin logic and the pair order are exactly those of the uninterrupted run
-        s.neighbors = find_neighbors(s.x_ref, s.x_ref, radius=self.search_radius)
+        s.neighbors = self._find_neighbors()
         # the first kick of the next step forms L with the table of the current positions
         # (kdk); without it a restarted run had no table at all
         self._shape_functions(arrays.get("table_volumes"))
@@ -715,4 +775,4 @@ class FluidSolver(Solver):
             "wall_penetration": (dict(self.penetration, threshold_dx=PENETRATION_WARNING)
                                  if self._offsets is not None else None),
             "run_checks": to_jsonable(self.checks.summary(s, self.fallback_steps, self.fallback_points)),
-        }
+        } | ({"periodic": self.periodic.identity()} if self.periodic is not None else {})

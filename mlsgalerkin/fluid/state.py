@@ -23,6 +23,8 @@ name                   shape       meaning
 ``wall_acceleration``  (n_w, d)    acceleration of the wall at each wall particle (m/s^2)
 ``wall_normals``       (n_w, d)    unit normals into the fluid (turn with a rotating wall)
 ``gravity``            (d,)        the body-force acceleration (m/s^2), ``None`` without ``Gravity``
+``period``             3 floats    periods of the periodic axes (m), 0 for the others (all 0: none);
+                                   every pair kernel takes it (minimum-image offsets)
 ``wall_surfaces``      dict        each wall body's penalty surface now (:class:`WallSurfaceState`:
                                    facets, node positions and velocities, moved with the wall)
 ``sensors``            dict        scalar readings of the last evaluation that become time-series
@@ -95,6 +97,7 @@ class FluidState:
     x_ref: NDArray[np.float64] = field(default=None)  # type: ignore[assignment]
     wall_acceleration: NDArray[np.float64] = field(default=None)  # type: ignore[assignment]
     gravity: NDArray[np.float64] | None = None
+    period: tuple[float, float, float] = (0.0, 0.0, 0.0)
     #: The pressure model's reference sound speed ``c0`` (m/s) and exponent ``γ``, written by it in
     #: its set-up (before any other effect's): what the effects that scale with the sound speed read.
     c0: float = float("nan")

@@ -41,6 +41,7 @@ from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.kernels import get_kernel, kernel_f_df
 from mlsgalerkin.pairs import pair_offset
+from mlsgalerkin.periodic import as_period, minimum_image
 
 __all__ = ["SLIP_MODES", "Walls", "extrapolate_wall_state", "extrapolate_wall_state_reference"]
 
@@ -50,7 +51,7 @@ SLIP_MODES = {"no_slip": 0, "free_slip": 1, "fixed": 2}
 @numba.njit(parallel=True, cache=True)
 def _extrapolate(
     wall_ids, indptr, indices, x, v, rho, p, h, is_fluid, kid, support, dim, g_minus_a,
-    wall_velocity, normals, slip, rho_ref, p_out, rho_out, v_out,
+    wall_velocity, normals, slip, rho_ref, p_out, rho_out, v_out, period,
 ):
     for t in prange(wall_ids.shape[0]):
         w = wall_ids[t]
@@ -66,7 +67,8 @@ def _extrapolate(
             f = indices[q]
             if not is_fluid[f]:
                 continue
-            _, _, _, r2 = pair_offset(x, w, f)
+            d0, d1, d2, r2 = pair_offset(x, w, f, period)   # x_fw; x_wf = −x_fw (exact)
+            dwf = (-d0, -d1, -d2)
             wgt, _ = kernel_f_df(kid, np.sqrt(r2) / h[f], support, dim)
             if wgt <= 0.0:
                 continue
@@ -74,7 +76,7 @@ def _extrapolate(
             sp += p[f] * wgt
             sr += rho[f] * wgt
             for a in range(dim):
-                hyd += g_minus_a[t, a] * rho[f] * (x[w, a] - x[f, a]) * wgt
+                hyd += g_minus_a[t, a] * rho[f] * dwf[a] * wgt
             sv0 += v[f, 0] * wgt
             sv1 += v[f, 1] * wgt
             if dim == 3:
@@ -111,14 +113,15 @@ def extrapolate_wall_state(
     x: NDArray[np.float64], v: NDArray[np.float64], rho: NDArray[np.float64], p: NDArray[np.float64],
     h: NDArray[np.float64], is_fluid: NDArray[np.bool_], kernel, g_minus_a: NDArray[np.float64],
     wall_velocity: NDArray[np.float64], normals: NDArray[np.float64], slip: str,
-    rho_ref: NDArray[np.float64],
+    rho_ref: NDArray[np.float64], period: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Wall pressure ``(n_w,)`` Pa, density ``(n_w,)`` kg/m³ and velocity ``(n_w, d)`` m/s.
 
     ``wall_ids (n_w,)`` index the wall rows of the CSR neighbour table over all particles;
     ``x, v, rho, p, h, is_fluid`` are over all particles; ``g_minus_a`` is the gravity minus
     the wall's acceleration at each wall particle, ``(n_w, d)`` or ``(d,)`` for all (m/s²;
-    gravity alone for fixed walls); ``wall_velocity, normals (n_w, d)``; ``rho_ref (n_w,)``.
+    gravity alone for fixed walls); ``wall_velocity, normals (n_w, d)``; ``rho_ref (n_w,)``;
+    ``period (3,)`` m: minimum-image offsets along the periodic axes (default none).
     """
     n_w, dim = wall_ids.shape[0], x.shape[1]
     p_out = np.empty(n_w)
@@ -128,14 +131,14 @@ def extrapolate_wall_state(
     _extrapolate(
         wall_ids, indptr, indices, x, v, rho, p, h, is_fluid, kernel.kernel_id, kernel.support,
         dim, g_minus_a, wall_velocity, normals, SLIP_MODES[slip], rho_ref,
-        p_out, rho_out, v_out,
+        p_out, rho_out, v_out, as_period(period),
     )
     return p_out, rho_out, v_out
 
 
 def extrapolate_wall_state_reference(
     wall_ids, indptr, indices, x, v, rho, p, h, is_fluid, kernel, g_minus_a, wall_velocity, normals,
-    slip, rho_ref,
+    slip, rho_ref, period=None,
 ):
     """Numpy version of :func:`extrapolate_wall_state` (tests)."""
     dim = x.shape[1]
@@ -145,7 +148,7 @@ def extrapolate_wall_state_reference(
     for t, w in enumerate(wall_ids):
         nb = indices[indptr[w]:indptr[w + 1]]
         nb = nb[is_fluid[nb]]
-        d = x[w] - x[nb]
+        d = -minimum_image(x[nb] - x[w], as_period(period))
         W = kernel.shape(np.linalg.norm(d, axis=1) / h[nb], dim) if len(nb) else np.zeros(0)
         sw = W.sum()
         if sw > 0:
@@ -209,7 +212,7 @@ class Walls(Effect):
         g = s.gravity if s.gravity is not None else np.zeros(s.dim)
         return extrapolate_wall_state(
             self._ids, nb.indptr, nb.indices, s.x, s.v, s.rho, s.p, s.h, self._is_fluid, self._kernel,
-            g - s.wall_acceleration, s.wall_velocity, s.wall_normals, self.slip, self._rho_ref,
+            g - s.wall_acceleration, s.wall_velocity, s.wall_normals, self.slip, self._rho_ref, s.period,
         )
 
     def kinematics(self, s: FluidState) -> None:
