@@ -53,6 +53,7 @@ from numpy.typing import NDArray
 from scipy import ndimage
 
 from mlsgalerkin.pairs import pair_offset
+from mlsgalerkin.periodic import as_period
 
 __all__ = [
     "CLOSED_GAP",
@@ -190,7 +191,7 @@ class PairStatistics:
 
 
 @numba.njit(parallel=True, cache=True)
-def _pair_rows(indptr, indices, x, n_fluid, clump2, min_ff, clumped, min_fw):
+def _pair_rows(indptr, indices, x, n_fluid, clump2, min_ff, clumped, min_fw, period):
     for i in prange(n_fluid):
         best_ff = np.inf
         best_fw = np.inf
@@ -199,7 +200,7 @@ def _pair_rows(indptr, indices, x, n_fluid, clump2, min_ff, clumped, min_fw):
             j = indices[q]
             if j == i:
                 continue
-            d0, d1, d2, r2 = pair_offset(x, i, j)
+            d0, d1, d2, r2 = pair_offset(x, i, j, period)
             if j < n_fluid:
                 if j > i:   # each fluid pair once
                     if r2 < best_ff:
@@ -214,16 +215,18 @@ def _pair_rows(indptr, indices, x, n_fluid, clump2, min_ff, clumped, min_fw):
 
 
 def pair_statistics(indptr: NDArray[np.int64], indices: NDArray[np.int32], x: NDArray[np.float64], n_fluid: int,
-                    spacing: float, clump_distance: float = CLUMP_DISTANCE) -> PairStatistics:
+                    spacing: float, clump_distance: float = CLUMP_DISTANCE,
+                    period: NDArray[np.float64] | None = None) -> PairStatistics:
     """:class:`PairStatistics` of the fluid particles ``0 … n_fluid − 1`` from the neighbour table
     of all particles (fluid first, then walls): CSR ``indptr (n + 1,)``, ``indices (nnz,)`` (a
     symmetric table; only pairs in it are seen), positions ``x (n, d)`` (m), ``spacing`` Δx (m),
-    ``clump_distance`` in spacings."""
+    ``clump_distance`` in spacings; ``period (3,)`` (m): minimum-image offsets along the periodic
+    axes (default none)."""
     min_ff = np.empty(n_fluid)
     clumped = np.empty(n_fluid, dtype=np.int64)
     min_fw = np.empty(n_fluid)
     _pair_rows(np.ascontiguousarray(indptr), np.ascontiguousarray(indices), np.ascontiguousarray(x), n_fluid,
-               (clump_distance * spacing) ** 2, min_ff, clumped, min_fw)
+               (clump_distance * spacing) ** 2, min_ff, clumped, min_fw, as_period(period))
     return _statistics(min_ff, clumped, min_fw, spacing)
 
 

@@ -146,7 +146,7 @@ class FluidRunChecks:
             self._record_volume(s, err)
         if s.neighbors is not None and s.n_fluid:
             nb = s.neighbors
-            ps = pair_statistics(nb.indptr, nb.indices, s.x, s.n_fluid, s.spacing)
+            ps = pair_statistics(nb.indptr, nb.indices, s.x, s.n_fluid, s.spacing, period=s.period)
             out["min_pair_distance_dx"] = ps.min_pair_distance_dx
             out["clumped_pairs"] = ps.clumped_pairs
             out["min_wall_distance_dx"] = ps.min_wall_distance_dx
