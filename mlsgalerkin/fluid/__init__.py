@@ -27,6 +27,8 @@ module                                 contents
 :mod:`~mlsgalerkin.fluid.shifting`     :class:`ParticleShifting` and its kernel
 :mod:`~mlsgalerkin.fluid.consistent_integration`  :class:`ConsistentIntegration`: nodal
                                        integration that meets the integration constraint
+:mod:`~mlsgalerkin.fluid.linear_consistency`  :class:`LinearConsistentPressure`: the pressure's
+                                       linear part integrated exactly, with the free-surface term
 :mod:`~mlsgalerkin.fluid.stabilisation`  :func:`stabilisation`: the stabilising effects from a few parameters
 :mod:`~mlsgalerkin.fluid.corrected_gradient`  the renormalised gradient of the density ratio
 :mod:`~mlsgalerkin.fluid.free_surface` :class:`FreeSurfaceDetection` and its kernels
@@ -50,6 +52,7 @@ from mlsgalerkin.fluid.bodies import (
     wall_box,
 )
 from mlsgalerkin.fluid.consistent_integration import ConsistentIntegration
+from mlsgalerkin.fluid.linear_consistency import LinearConsistentPressure
 from mlsgalerkin.fluid.density_diffusion import DensityDiffusion
 from mlsgalerkin.fluid.effect import Effect
 from mlsgalerkin.fluid.eos import (
@@ -95,6 +98,7 @@ from mlsgalerkin.periodic import Periodic
 __all__ = [
     "BulkViscosity",
     "ConsistentIntegration",
+    "LinearConsistentPressure",
     "DensityDiffusion",
     "DensityFilter",
     "Effect",
