@@ -67,7 +67,9 @@ class Parameters:
     delta: float = 0.1             #: density diffusion δ (δ-SPH, same-phase pairs); 0 drops it (–)
     shifting: str = "local"        #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
     density_filter: int = 0        #: Shepard density filter every this many steps; 0 drops it (–)
+    negative_pressure: str = "allow"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     consistent_integration: bool = True  #: nodal integration that meets the integration constraint (VCI) (bool)
+    linear_consistency: bool = False  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     lid: bool = True               #: rigid lid on top; false: a free surface (bool)
     h_factor: float = 1.3          #: smoothing length / particle spacing, h/dx (–)
     g: float = 9.81                #: gravitational acceleration (m/s²)
@@ -108,8 +110,9 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     wave = math.sqrt(g_reduced * p.depth)
     scheme = water(c0, u_max=max(wave, 1e-9), gravity=(0.0, -p.g), alpha=p.alpha, flow=(0.5 * wave, p.depth),
                    residual_viscosity=p.residual_viscosity, delta=p.delta, shifting=p.shifting,
-                   density_filter=p.density_filter, negative_pressure="allow",
-                   consistent_integration=p.consistent_integration, spacing=p.dx, h_factor=p.h_factor)
+                   density_filter=p.density_filter, negative_pressure=p.negative_pressure,
+                   consistent_integration=p.consistent_integration, linear_consistency=p.linear_consistency,
+                   spacing=p.dx, h_factor=p.h_factor)
     n = body.n
     scale = (p.rho_heavy - p.rho_light) * p.g * p.depth
 
@@ -166,6 +169,8 @@ def check(p: Parameters) -> list[str]:
     out = require_positive(p, "depth", "length", "rho_light", "rho_heavy", "dx", "t_end", "h_factor", "g", "settle",
                            "frame_every")
     out += require_nonnegative(p, "alpha", "delta", "c0", "density_filter")
+    out += require(p.negative_pressure in ("allow", "clamp", "cavitate", "free_surface"),
+                   f"negative_pressure must be allow, clamp, cavitate or free_surface, got {p.negative_pressure!r}")
     out += require(p.shifting in SHIFTING_MODES,
                    f"shifting = {p.shifting!r}: choose one of {', '.join(SHIFTING_MODES)}")
     if not out:

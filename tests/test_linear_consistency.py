@@ -63,3 +63,30 @@ def test_refuses_a_constant_basis():
                                      approximation=Approximation(basis="constant"))], t_end=0.1)
     with pytest.raises(ValueError, match="linear"):
         Simulation(scene)
+
+
+def test_compiled_kernels_agree_with_the_numpy_reference():
+    from mlsgalerkin.fluid.linear_consistency import (
+        linear_consistency_force, linear_consistency_force_reference, surface_faces, surface_faces_reference)
+    from mlsgalerkin.kernels import get_kernel
+    c0 = 10 * math.sqrt(2 * G * 0.2)
+    fl = FluidBody.block("water", (0.0, 0.0), (0.4, 0.2), 0.02, [Phase("water", RHO)])
+    rng = np.random.default_rng(3)
+    fl.positions[:] += rng.uniform(-0.2, 0.2, fl.positions.shape) * 0.02   # disordered, with a free surface
+    fl.density[:] = hydrostatic_density(np.full(fl.n, RHO), 0.2 - fl.positions[:, 1], G, c0)
+    walls = wall_box((0.0, 0.0), (0.4, 0.3), 0.02, layers=3, reference_density=RHO)
+    sim = Simulation(Scene([fl, walls], [water(c0, spacing=0.02, negative_pressure="allow")], t_end=1.0))
+    sim.run(max_steps=3, progress=False)
+    s = sim.state.fluid
+    k = get_kernel("cubic_spline")
+    c1, n1, i1 = surface_faces(s, k, 0.85)
+    c2, n2, i2 = surface_faces_reference(s, k, 0.85)
+    np.testing.assert_allclose(c1, c2, rtol=1e-12)
+    assert np.array_equal(i1, i2) and i1.size > 10
+    np.testing.assert_allclose(n1, n2, atol=1e-12)
+    f1, ok1, m1 = linear_consistency_force(s, k, "mls")
+    f2, ok2, m2 = linear_consistency_force_reference(s, k, "mls")
+    assert np.array_equal(ok1, ok2) and m1 == m2
+    scale = np.abs(f2).max()
+    assert scale > 0
+    np.testing.assert_allclose(f1, f2, rtol=0, atol=1e-10 * scale)

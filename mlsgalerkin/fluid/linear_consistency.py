@@ -47,35 +47,125 @@ deviation 0.13–0.18 % of :math:`\rho gH` (DNI: 0.67 %, growing), with or witho
 released. The dam break with impact completes at ``H/Δx = 20`` (P1 peak 2.83 against 2.59
 measured). ``verification/results/quiet_state/investigation.md`` has the ablations.
 
-**What it costs and breaks.** This implementation is the numpy/scipy reference (sparse
-products over the shape table, the shape functions at the face points): about 20 times the
-cost of a step of a small run; the compiled kernels are still to be written, so it is not part
-of any default. Like the constant correction it gives up the exact momentum balance
+**What it costs and breaks.** One scatter over the shape table (the residuals), one gather
+(the fits), one pass over the neighbour pairs (Shepard sums and normals) and the shape
+functions at the face points; numba kernels with a numpy reference
+(:func:`linear_consistency_force_reference`). Like the constant correction it gives up the exact momentum balance
 :math:`\sum_i\mathbf f_i = 0` by the size of the integration residual times the pressure.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
+import numba
 import numpy as np
+from numba import prange
 from numpy.typing import NDArray
 
 from mlsgalerkin.approximation.build import evaluate_shape_functions
 from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
-from mlsgalerkin.kernels import Kernel, get_kernel
+from mlsgalerkin.kernels import Kernel, get_kernel, kernel_f_df
 from mlsgalerkin.neighbors import find_neighbors
+from mlsgalerkin.pairs import pair_offset
 
-__all__ = ["LinearConsistentPressure", "linear_consistency_force", "surface_faces"]
+__all__ = ["LinearConsistentPressure", "linear_consistency_force", "linear_consistency_force_reference",
+           "surface_faces", "surface_faces_reference"]
 
 FloatArray = NDArray[np.float64]
+NO_PERIOD = (0.0, 0.0, 0.0)
 
 
-def surface_faces(s: FluidState, kernel: Kernel, surface: float) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
-    """Shepard sums ``c (n_fluid,)`` of the fluid particles over all their neighbours, and the
-    outer face points ``y (m, d)`` (m) with outward unit normals ``n (m, d)`` of the ``m`` fluid
-    particles with ``c < surface`` (their indices ``(m,)``); see the module docstring."""
+@numba.njit(parallel=True, cache=True)
+def _residuals(indptr, indices, values, grads, x, V, n_nodes, n_blocks):
+    """Per node ``j``: ``e_j`` (columns ``:d``), ``w_j`` (column ``d``) and ``D_j + w_j I``
+    (columns ``d+1:``, row-major), scattered from the rows ``k`` of the table by thread blocks."""
+    n_rows = indptr.shape[0] - 1
+    dim = grads.shape[1]
+    nc = dim + 1 + dim * dim
+    slab = np.zeros((n_blocks, n_nodes, nc))
+    for blk in prange(n_blocks):
+        for k in range((n_rows * blk) // n_blocks, (n_rows * (blk + 1)) // n_blocks):
+            vk = V[k]
+            for q in range(indptr[k], indptr[k + 1]):
+                j = indices[q]
+                for a in range(dim):
+                    ga = grads[q, a] * vk
+                    slab[blk, j, a] += ga
+                    for b in range(dim):
+                        slab[blk, j, dim + 1 + a * dim + b] += ga * (x[k, b] - x[j, b])
+                slab[blk, j, dim] += values[q] * vk
+    out = np.zeros((n_nodes, nc))
+    for j in prange(n_nodes):
+        for blk in range(n_blocks):
+            for c in range(nc):
+                out[j, c] += slab[blk, j, c]
+        for a in range(dim):
+            out[j, dim + 1 + a * dim + a] += out[j, dim]
+    return out
+
+
+@numba.njit(parallel=True, cache=True)
+def _fit(indptr, indices, values, grads, p, rows, out):
+    """MLS value and gradient of ``p`` at the points ``rows``: ``out[r] = (Σ N p, Σ ∇N p)``."""
+    dim = grads.shape[1]
+    for r in prange(rows.shape[0]):
+        k = rows[r]
+        for c in range(dim + 1):
+            out[r, c] = 0.0
+        for q in range(indptr[k], indptr[k + 1]):
+            j = indices[q]
+            out[r, 0] += values[q] * p[j]
+            for a in range(dim):
+                out[r, 1 + a] += grads[q, a] * p[j]
+
+
+@numba.njit(parallel=True, cache=True)
+def _shepard_normal(x, h, volume, indptr, indices, n_fluid, kid, support, norm_d, period, c, normal):
+    """Shepard sum ``c_i = Σ_j W_ij V_j`` and ``Σ_j V_j W'(r)/r x_ji`` (the outward normal, not
+    normalised) of the fluid particles over all their neighbours."""
+    dim = x.shape[1]
+    for i in prange(n_fluid):
+        acc = 0.0
+        n0 = n1 = n2 = 0.0
+        for q in range(indptr[i], indptr[i + 1]):
+            j = indices[q]
+            d0, d1, d2, r2 = pair_offset(x, i, j, period)
+            hij = 0.5 * (h[i] + h[j])
+            r = math.sqrt(r2)
+            f, df = kernel_f_df(kid, r / hij, support, dim)
+            scale = volume[j] * norm_d / hij**dim
+            acc += f * scale
+            if r > 0.0:
+                s = scale * df / hij / r
+                n0 += s * d0
+                n1 += s * d1
+                n2 += s * d2
+        c[i] = acc
+        normal[i, 0] = n0
+        if dim > 1:
+            normal[i, 1] = n1
+        if dim > 2:
+            normal[i, 2] = n2
+
+
+@numba.njit(cache=True)
+def _face_scatter(indptr, indices, values, load, n_nodes):
+    """``b_j = Σ_f N_j(y_f) load_f`` over the face rows ``f`` (load ``(m, d)``)."""
+    dim = load.shape[1]
+    out = np.zeros((n_nodes, dim))
+    for f in range(indptr.shape[0] - 1):
+        for q in range(indptr[f], indptr[f + 1]):
+            j = indices[q]
+            for a in range(dim):
+                out[j, a] += values[q] * load[f, a]
+    return out
+
+
+def surface_faces_reference(s: FluidState, kernel: Kernel, surface: float) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
+    """Numpy version of :func:`surface_faces` (tests)."""
     nf, x, d = s.n_fluid, s.x, s.x.shape[1]
     nb = s.neighbors
     ip = nb.indptr[: nf + 1]
@@ -96,11 +186,9 @@ def surface_faces(s: FluidState, kernel: Kernel, surface: float) -> tuple[FloatA
     return c, n_s, surf
 
 
-def linear_consistency_force(s: FluidState, kernel: Kernel, method: str, *, surface: float = 0.85,
-                             c_min: float = 0.75) -> tuple[FloatArray, NDArray[np.bool_], int]:
-    """The correction ``Δf (n_fluid, d)`` (N per unit depth in 2D) of the module docstring at the
-    current state (table, volumes, pressures), the mask of corrected fluid nodes and the number
-    of surface faces."""
+def linear_consistency_force_reference(s: FluidState, kernel: Kernel, method: str, *, surface: float = 0.85,
+                                       c_min: float = 0.75) -> tuple[FloatArray, NDArray[np.bool_], int]:
+    """Numpy version of :func:`linear_consistency_force` (tests), with sparse matrices."""
     t = s.table
     nf, x, d = s.n_fluid, s.x, s.x.shape[1]
     N = t.value_matrix()                 # (points, nodes): N_j(x_k)
@@ -117,11 +205,9 @@ def linear_consistency_force(s: FluidState, kernel: Kernel, method: str, *, surf
             D[:, al, be] = G[al].T @ (V * x[:, be]) - x[:, be] * e[:, al]
     D += w[:, None, None] * np.eye(d)
     df = -a[:, None] * e - np.einsum("iab,ib->ia", D, g)
-    c, n_s, surf = surface_faces(s, kernel, surface)
+    c, n_s, surf = surface_faces_reference(s, kernel, surface)
     if surf.size:
-        y = np.ascontiguousarray(x[surf] + 0.5 * s.spacing * n_s)
-        near = find_neighbors(y, x, node_radius=kernel.support * s.h)
-        faces = evaluate_shape_functions(y, np.ascontiguousarray(x), s.h, near, kernel, s.approximation_order, method)
+        faces = _face_table(s, kernel, method, surf, n_s)
         Nf = faces.value_matrix()
         ph = Nf @ p
         df += Nf.T @ ((ph * s.spacing ** (d - 1))[:, None] * n_s)
@@ -130,11 +216,61 @@ def linear_consistency_force(s: FluidState, kernel: Kernel, method: str, *, surf
     return out, ok, int(surf.size)
 
 
+def surface_faces(s: FluidState, kernel: Kernel, surface: float) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
+    """Shepard sums ``c (n_fluid,)`` of the fluid particles over all their neighbours, and the
+    outward unit normals ``n (m, d)`` of the ``m`` fluid particles with ``c < surface`` and
+    their indices ``(m,)`` (module docstring)."""
+    nf, d = s.n_fluid, s.x.shape[1]
+    c = np.empty(nf)
+    normal = np.zeros((nf, d))
+    nb = s.neighbors
+    _shepard_normal(s.x, s.h, s.M / s.rho, nb.indptr, nb.indices, nf, kernel.kernel_id, float(kernel.support),
+                    float(kernel.normalisation(d)), NO_PERIOD, c, normal)
+    length = np.sqrt(np.einsum("id,id->i", normal, normal))
+    surf = np.flatnonzero((c < surface) & (length > 0))
+    return c, normal[surf] / length[surf, None], surf
+
+
+def _face_table(s: FluidState, kernel: Kernel, method: str, surf: NDArray[np.int64], n_s: FloatArray):
+    """Shape functions at the outer face points ``y_s = x_s + ½Δx n_s`` of the surface particles."""
+    x = np.ascontiguousarray(s.x)
+    y = np.ascontiguousarray(x[surf] + 0.5 * s.spacing * n_s)
+    near = find_neighbors(y, x, node_radius=kernel.support * s.h)
+    return evaluate_shape_functions(y, x, s.h, near, kernel, s.approximation_order, method)
+
+
+def linear_consistency_force(s: FluidState, kernel: Kernel, method: str, *, surface: float = 0.85,
+                             c_min: float = 0.75) -> tuple[FloatArray, NDArray[np.bool_], int]:
+    """The correction ``Δf (n_fluid, d)`` (N per unit depth in 2D) of the module docstring at the
+    current state (table, volumes, pressures), the mask ``(n_fluid,)`` of corrected fluid nodes
+    and the number of surface faces. Compiled kernels; :func:`linear_consistency_force_reference`
+    is the numpy version."""
+    t = s.table
+    nf, d = s.n_fluid, s.x.shape[1]
+    V = np.ascontiguousarray(s.volume, dtype=float)
+    p = np.ascontiguousarray(s.p, dtype=float)
+    res = _residuals(t.indptr, t.indices, t.values, t.gradients, s.x, V, t.n_nodes,
+                     max(1, numba.get_num_threads()))
+    fit = np.empty((nf, d + 1))
+    _fit(t.indptr, t.indices, t.values, t.gradients, p, np.arange(nf, dtype=np.int64), fit)
+    e, Dw = res[:nf, :d], res[:nf, d + 1:].reshape(nf, d, d)
+    df = -fit[:, :1] * e - np.einsum("iab,ib->ia", Dw, fit[:, 1:])
+    c, n_s, surf = surface_faces(s, kernel, surface)
+    if surf.size:
+        faces = _face_table(s, kernel, method, surf, n_s)
+        ph = np.empty((surf.size, d + 1))
+        _fit(faces.indptr, faces.indices, faces.values, faces.gradients, p, np.arange(surf.size, dtype=np.int64), ph)
+        load = np.ascontiguousarray((ph[:, 0] * s.spacing ** (d - 1))[:, None] * n_s)
+        df += _face_scatter(faces.indptr, faces.indices, faces.values, load, t.n_nodes)[:nf]
+    ok = (c >= c_min) & (t.order[:nf] >= s.approximation_order)
+    return np.where(ok[:, None], df, 0.0), ok, int(surf.size)
+
+
 class LinearConsistentPressure(Effect):
     """Linearly consistent integration of the pressure force with the free-surface boundary term
     (module docstring): ``f_i += −a_i e_i − (D_i + w_i I) g_i + b_i`` at the fluid nodes with a
     Shepard sum of at least ``c_min``; ``surface`` is the Shepard sum below which a particle's
-    outer face carries the boundary term. Experimental: the numpy reference, not yet compiled."""
+    outer face carries the boundary term. Experimental: not part of any default yet."""
 
     name = "linear_consistent_pressure"
     stages = ("force",)

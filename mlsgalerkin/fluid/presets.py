@@ -26,6 +26,7 @@ from mlsgalerkin.approximation.settings import Approximation
 from mlsgalerkin.fluid.effect import Effect
 from mlsgalerkin.fluid.eos import TaitPressure
 from mlsgalerkin.fluid.gravity import Gravity
+from mlsgalerkin.fluid.linear_consistency import LinearConsistentPressure
 from mlsgalerkin.fluid.pair_viscosity import MonaghanViscosity
 from mlsgalerkin.fluid.scheme import FluidScheme
 from mlsgalerkin.fluid.stabilisation import stabilisation
@@ -39,7 +40,8 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
           slip: str | None = "free_slip", alpha: float = 0.02, flow: tuple[float, float] | None = None,
           residual_viscosity: bool = False, newtonian: bool = False, delta: float = 0.1, shifting: str = "local",
           density_filter: int = 0, negative_pressure: str = "cavitate", penalty_thickness: float | None = None,
-          consistent_integration: bool = False, spacing: float | None = None, h_factor: float = 1.3,
+          consistent_integration: bool = False, linear_consistency: bool = False, spacing: float | None = None,
+          h_factor: float = 1.3,
           approximation: Approximation | None = None, extra: Sequence[Effect] = (), **options: Any) -> FluidScheme:
     """The recommended :class:`~mlsgalerkin.fluid.scheme.FluidScheme` for water (module docstring).
 
@@ -49,7 +51,9 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     residual=residual_viscosity, flow=flow)`` if ``alpha > 0``; then
     :func:`~mlsgalerkin.fluid.stabilisation.stabilisation` of ``delta``, ``shifting``,
     ``density_filter``, ``negative_pressure``, ``penalty_thickness`` (m; the tank's penalty surface
-    as a backstop, reaching one ``spacing``) and ``consistent_integration``; then ``extra``.
+    as a backstop, reaching one ``spacing``) and ``consistent_integration``;
+    ``LinearConsistentPressure()`` if ``linear_consistency`` (experimental: the pressure's local
+    linear fit integrated exactly, with the free-surface boundary term); then ``extra``.
 
     Parameters
     ----------
@@ -81,6 +85,8 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     effects += stabilisation(delta=delta, shifting=shifting, density_filter=density_filter,
                              negative_pressure=negative_pressure, penalty_thickness=penalty_thickness,
                              spacing=spacing, consistent_integration=consistent_integration)
+    if linear_consistency:
+        effects.append(LinearConsistentPressure())
     effects += list(extra)
     approximation = approximation if approximation is not None else Approximation(h_factor=h_factor)
     return FluidScheme(effects, approximation=approximation, spacing=spacing, **options)
