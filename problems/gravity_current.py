@@ -92,6 +92,7 @@ class Parameters:
     shifting: str = "local"        #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
     density_filter: int = 0        #: Shepard density filter every this many steps; 0 drops it (–)
     consistent_integration: bool = False  #: nodal integration that meets the integration constraint (VCI) (bool)
+    linear_consistency: bool = False  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     penalty_walls: bool = True     #: the tank's inner surface as a penalty-contact backstop (bool)
     negative_pressure: str = "allow"  #: tension treatment: allow, clamp or cavitate (choice)
     lid_pressure_factor: float = 1.0  #: pressure under the lid at the start / (rho_heavy g D), a closed tank's free level (–)
@@ -136,7 +137,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                    flow=(reference_head_speed(p), p.depth), newtonian=p.viscosity > 0, delta=p.delta,
                    shifting=p.shifting, density_filter=p.density_filter, negative_pressure=p.negative_pressure,
                    penalty_thickness=0.25 * p.dx if p.penalty_walls else None,
-                   consistent_integration=p.consistent_integration, spacing=p.dx, h_factor=p.h_factor)
+                   consistent_integration=p.consistent_integration, linear_consistency=p.linear_consistency,
+                   spacing=p.dx, h_factor=p.h_factor)
     n_fluid = body.n
     half = 0.5 * p.depth
 
