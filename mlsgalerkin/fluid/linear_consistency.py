@@ -34,7 +34,10 @@ the free-surface boundary term taken on the outer faces of the surface particles
 over the fluid particles ``s`` whose Shepard sum :math:`c_s = \sum_j W_{sj}V_j` (fluid and
 wall neighbours) is below ``surface`` (0.85; 0.76 on a lattice's top row, 0.99 on the row
 under it), with the outward normal :math:`\mathbf n_s = -\sum_j V_j\nabla_s W_{sj}/|\cdot|` and
-:math:`p^h(\mathbf y_s) = \sum_j N_j(\mathbf y_s)p_j` the approximated pressure on the face. A
+:math:`p^h(\mathbf y_s) = a_s + \mathbf g_s\cdot(\mathbf y_s - \mathbf x_s)` the surface particle's
+pressure fit on its face; the shape functions on the face are those of the surface particle
+continued to first order, :math:`N_j(\mathbf y_s) \approx N_j(\mathbf x_s) + \nabla N_j(\mathbf x_s)\cdot(\mathbf y_s -
+\mathbf x_s)` (they keep the partition of unity and linear reproduction, and need no search). A
 fluid at hydrostatic rest has :math:`p^h = 0` on the faces and feels no boundary term; a
 pressure that does not vanish at the surface (the face of a dam at its release, a compression
 wave reaching the surface) pushes it, as it should. Wall particles extend the fluid (a
@@ -48,8 +51,8 @@ released. The dam break with impact completes at ``H/Δx = 20`` (P1 peak 2.83 ag
 measured). ``verification/results/quiet_state/investigation.md`` has the ablations.
 
 **What it costs and breaks.** One scatter over the shape table (the residuals), one gather
-(the fits), one pass over the neighbour pairs (Shepard sums and normals) and the shape
-functions at the face points; numba kernels with a numpy reference
+(the fits), one pass over the neighbour pairs (Shepard sums and normals) and a scatter over the
+surface particles' rows; numba kernels with a numpy reference
 (:func:`linear_consistency_force_reference`). Like the constant correction it gives up the exact momentum balance
 :math:`\sum_i\mathbf f_i = 0` by the size of the integration residual times the pressure.
 """
@@ -64,11 +67,9 @@ import numpy as np
 from numba import prange
 from numpy.typing import NDArray
 
-from mlsgalerkin.approximation.build import evaluate_shape_functions
 from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.kernels import Kernel, get_kernel, kernel_f_df
-from mlsgalerkin.neighbors import find_neighbors
 from mlsgalerkin.pairs import pair_offset
 
 __all__ = ["LinearConsistentPressure", "linear_consistency_force", "linear_consistency_force_reference",
@@ -152,15 +153,20 @@ def _shepard_normal(x, h, volume, indptr, indices, n_fluid, kid, support, norm_d
 
 
 @numba.njit(cache=True)
-def _face_scatter(indptr, indices, values, load, n_nodes):
-    """``b_j = Σ_f N_j(y_f) load_f`` over the face rows ``f`` (load ``(m, d)``)."""
+def _face_scatter(indptr, indices, values, grads, owners, delta, load, n_nodes):
+    """``b_j = Σ_f N_j(y_f) load_f`` over the faces ``f`` of the particles ``owners``, with
+    ``N_j(y_f) = N_j(x_o) + ∇N_j(x_o)·δ_f`` from the owner's row of the table (``δ_f = y_f − x_o``)."""
     dim = load.shape[1]
     out = np.zeros((n_nodes, dim))
-    for f in range(indptr.shape[0] - 1):
-        for q in range(indptr[f], indptr[f + 1]):
+    for f in range(owners.shape[0]):
+        o = owners[f]
+        for q in range(indptr[o], indptr[o + 1]):
             j = indices[q]
+            nv = values[q]
             for a in range(dim):
-                out[j, a] += values[q] * load[f, a]
+                nv += grads[q, a] * delta[f, a]
+            for a in range(dim):
+                out[j, a] += nv * load[f, a]
     return out
 
 
@@ -207,9 +213,9 @@ def linear_consistency_force_reference(s: FluidState, kernel: Kernel, method: st
     df = -a[:, None] * e - np.einsum("iab,ib->ia", D, g)
     c, n_s, surf = surface_faces_reference(s, kernel, surface)
     if surf.size:
-        faces = _face_table(s, kernel, method, surf, n_s)
-        Nf = faces.value_matrix()
-        ph = Nf @ p
+        delta = 0.5 * s.spacing * n_s                                  # y_s − x_s
+        Nf = N[surf] + sum(G[b][surf].multiply(delta[:, b:b + 1]) for b in range(d))   # N_j(y_s), first order
+        ph = a[surf] + np.einsum("sd,sd->s", g[surf], delta)            # p^h(y_s) of the linear fit
         df += Nf.T @ ((ph * s.spacing ** (d - 1))[:, None] * n_s)
     ok = (c >= c_min) & (t.order[:nf] >= s.approximation_order)
     out = np.where(ok[:, None], df[:nf], 0.0)
@@ -231,14 +237,6 @@ def surface_faces(s: FluidState, kernel: Kernel, surface: float) -> tuple[FloatA
     return c, normal[surf] / length[surf, None], surf
 
 
-def _face_table(s: FluidState, kernel: Kernel, method: str, surf: NDArray[np.int64], n_s: FloatArray):
-    """Shape functions at the outer face points ``y_s = x_s + ½Δx n_s`` of the surface particles."""
-    x = np.ascontiguousarray(s.x)
-    y = np.ascontiguousarray(x[surf] + 0.5 * s.spacing * n_s)
-    near = find_neighbors(y, x, node_radius=kernel.support * s.h)
-    return evaluate_shape_functions(y, x, s.h, near, kernel, s.approximation_order, method)
-
-
 def linear_consistency_force(s: FluidState, kernel: Kernel, method: str, *, surface: float = 0.85,
                              c_min: float = 0.75) -> tuple[FloatArray, NDArray[np.bool_], int]:
     """The correction ``Δf (n_fluid, d)`` (N per unit depth in 2D) of the module docstring at the
@@ -257,11 +255,10 @@ def linear_consistency_force(s: FluidState, kernel: Kernel, method: str, *, surf
     df = -fit[:, :1] * e - np.einsum("iab,ib->ia", Dw, fit[:, 1:])
     c, n_s, surf = surface_faces(s, kernel, surface)
     if surf.size:
-        faces = _face_table(s, kernel, method, surf, n_s)
-        ph = np.empty((surf.size, d + 1))
-        _fit(faces.indptr, faces.indices, faces.values, faces.gradients, p, np.arange(surf.size, dtype=np.int64), ph)
-        load = np.ascontiguousarray((ph[:, 0] * s.spacing ** (d - 1))[:, None] * n_s)
-        df += _face_scatter(faces.indptr, faces.indices, faces.values, load, t.n_nodes)[:nf]
+        delta = np.ascontiguousarray(0.5 * s.spacing * n_s)
+        ph = fit[surf, 0] + np.einsum("sd,sd->s", fit[surf, 1:], delta)
+        load = np.ascontiguousarray((ph * s.spacing ** (d - 1))[:, None] * n_s)
+        df += _face_scatter(t.indptr, t.indices, t.values, t.gradients, surf, delta, load, t.n_nodes)[:nf]
     ok = (c >= c_min) & (t.order[:nf] >= s.approximation_order)
     return np.where(ok[:, None], df, 0.0), ok, int(surf.size)
 
