@@ -29,6 +29,7 @@ module                                 contents
                                        integration that meets the integration constraint
 :mod:`~mlsgalerkin.fluid.linear_consistency`  :class:`LinearConsistentPressure`: the pressure's
                                        linear part integrated exactly, with the free-surface term
+:mod:`~mlsgalerkin.fluid.sponge`       :class:`SpongeZone`: a damping zone that absorbs waves
 :mod:`~mlsgalerkin.fluid.stabilisation`  :func:`stabilisation`: the stabilising effects from a few parameters
 :mod:`~mlsgalerkin.fluid.corrected_gradient`  the renormalised gradient of the density ratio
 :mod:`~mlsgalerkin.fluid.free_surface` :class:`FreeSurfaceDetection` and its kernels
@@ -53,6 +54,7 @@ from mlsgalerkin.fluid.bodies import (
 )
 from mlsgalerkin.fluid.consistent_integration import ConsistentIntegration
 from mlsgalerkin.fluid.linear_consistency import LinearConsistentPressure
+from mlsgalerkin.fluid.sponge import SpongeZone
 from mlsgalerkin.fluid.density_diffusion import DensityDiffusion
 from mlsgalerkin.fluid.effect import Effect
 from mlsgalerkin.fluid.eos import (
@@ -99,6 +101,7 @@ __all__ = [
     "BulkViscosity",
     "ConsistentIntegration",
     "LinearConsistentPressure",
+    "SpongeZone",
     "DensityDiffusion",
     "DensityFilter",
     "Effect",
