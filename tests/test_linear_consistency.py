@@ -84,8 +84,8 @@ def test_compiled_kernels_agree_with_the_numpy_reference():
     np.testing.assert_allclose(c1, c2, rtol=1e-12)
     assert np.array_equal(i1, i2) and i1.size > 10
     np.testing.assert_allclose(n1, n2, atol=1e-12)
-    f1, ok1, m1 = linear_consistency_force(s, k, "mls")
-    f2, ok2, m2 = linear_consistency_force_reference(s, k, "mls")
+    f1, ok1, m1 = linear_consistency_force(s, k)
+    f2, ok2, m2 = linear_consistency_force_reference(s, k)
     assert np.array_equal(ok1, ok2) and m1 == m2
     scale = np.abs(f2).max()
     assert scale > 0

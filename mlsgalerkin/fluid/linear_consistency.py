@@ -192,7 +192,7 @@ def surface_faces_reference(s: FluidState, kernel: Kernel, surface: float) -> tu
     return c, n_s, surf
 
 
-def linear_consistency_force_reference(s: FluidState, kernel: Kernel, method: str, *, surface: float = 0.85,
+def linear_consistency_force_reference(s: FluidState, kernel: Kernel, *, surface: float = 0.85,
                                        c_min: float = 0.75) -> tuple[FloatArray, NDArray[np.bool_], int]:
     """Numpy version of :func:`linear_consistency_force` (tests), with sparse matrices."""
     t = s.table
@@ -237,7 +237,7 @@ def surface_faces(s: FluidState, kernel: Kernel, surface: float) -> tuple[FloatA
     return c, normal[surf] / length[surf, None], surf
 
 
-def linear_consistency_force(s: FluidState, kernel: Kernel, method: str, *, surface: float = 0.85,
+def linear_consistency_force(s: FluidState, kernel: Kernel, *, surface: float = 0.85,
                              c_min: float = 0.75) -> tuple[FloatArray, NDArray[np.bool_], int]:
     """The correction ``Δf (n_fluid, d)`` (N per unit depth in 2D) of the module docstring at the
     current state (table, volumes, pressures), the mask ``(n_fluid,)`` of corrected fluid nodes
@@ -276,7 +276,6 @@ class LinearConsistentPressure(Effect):
     def __init__(self, *, surface: float = 0.85, c_min: float = 0.75) -> None:
         self.surface, self.c_min = float(surface), float(c_min)
         self._kernel: Kernel | None = None
-        self._method = "mls"
         self.corrected_share = float("nan")
         self.faces = 0
 
@@ -297,11 +296,9 @@ class LinearConsistentPressure(Effect):
             raise ValueError("LinearConsistentPressure does not support periodic axes yet (its surface faces are "
                              "found without the minimum image); drop it from a periodic scheme")
         self._kernel = get_kernel(ctx.approximation.kernel)
-        self._method = ctx.approximation.method
 
     def force(self, s: FluidState) -> None:
-        df, ok, faces = linear_consistency_force(s, self._kernel, self._method, surface=self.surface,
-                                                 c_min=self.c_min)
+        df, ok, faces = linear_consistency_force(s, self._kernel, surface=self.surface, c_min=self.c_min)
         s.force[s.fluid] += df
         self.corrected_share = float(np.mean(ok)) if ok.size else float("nan")
         self.faces = faces
