@@ -22,10 +22,11 @@ shape-function fallback  share of the force evaluations with a fallback,     poi
                                                                              (:class:`ShapeFunctionFallbackWarning`)
 =======================  ==================================================  =============================
 
-(*) at most every :data:`DISTRIBUTION_EVERY_STEPS` steps; the rows in between repeat the last
-evaluation (the Martin & Moyce dam break at a/Δx = 20 writes a row every step; evaluated every
-10 steps, the checks took 3.3 % of its run, nearly all of it the geometric volume of a fluid
-spread over a bounding box 20 times its area).
+(*) at the start and at every :data:`DISTRIBUTION_EVERY_STEPS`-th step, whatever the rows; the
+rows in between repeat the last evaluation, so a run restarted from a checkpoint evaluates at
+the same steps as one that never stopped (the Martin & Moyce dam break at a/Δx = 20 writes a
+row every step; evaluated every 10 steps, the checks took 3.3 % of its run, nearly all of it the
+geometric volume of a fluid spread over a bounding box 20 times its area).
 
 The weakly compressible model holds the density within about :math:`\mathrm{Ma}^2` of
 :math:`\rho_0` (:math:`\Delta\rho/\rho_0 \approx \mathrm{Ma}^2/2` at a stagnation point), so
@@ -82,9 +83,9 @@ MACH_LIMIT = 0.15
 FALLBACK_POINT_SHARE_LIMIT = 0.02
 #: Force evaluations before the fallback share is judged (the first steps of a run are few).
 FALLBACK_MIN_EVALUATIONS = 100
-#: The volume and pair statistics are evaluated at a time-series row at most every this many
-#: steps (a problem that records a row every step or two would pay them at every step); the
-#: rows in between repeat the last evaluation.
+#: The volume and pair statistics are evaluated at the start and at every this-many-th step,
+#: whatever the time-series rows (a problem that records a row every step or two would pay them
+#: at every step); the rows in between repeat the last evaluation.
 DISTRIBUTION_EVERY_STEPS = 20
 
 
@@ -121,12 +122,11 @@ class FluidRunChecks:
     # ------------------------------------------------------------------ every row
     def row(self, s: FluidState) -> dict[str, float]:
         """The time-series columns of the current state (geometric volume, volume error, pair
-        statistics: evaluated when :data:`DISTRIBUTION_EVERY_STEPS` steps have passed since the
-        last evaluation, else repeated; the Mach number now); updates the run's extremes and
-        warns once past a limit."""
+        statistics: those of the last evaluation — at the start, then every
+        :data:`DISTRIBUTION_EVERY_STEPS`-th step, :meth:`after_step` —; the Mach number now)."""
         t0 = time.perf_counter()
         last = self.last
-        if last["step"] is None or s.step - last["step"] >= DISTRIBUTION_EVERY_STEPS or s.step < last["step"]:
+        if last["step"] is None:
             last["step"], last["columns"] = s.step, self._distribution(s)
         out = dict(last["columns"])
         if math.isfinite(s.c0):
@@ -205,8 +205,12 @@ class FluidRunChecks:
     def after_step(self, s: FluidState, fallback_steps: int, fallback_points: int) -> None:
         """The Mach number of the step and the fallback shares so far (``fallback_steps``
         evaluations with a fallback and ``fallback_points`` fallen-back points, the solver's
-        counters); warns once past :data:`MACH_LIMIT` or :data:`FALLBACK_POINT_SHARE_LIMIT`."""
+        counters); the distribution columns at every :data:`DISTRIBUTION_EVERY_STEPS`-th step;
+        warns once past :data:`MACH_LIMIT` or :data:`FALLBACK_POINT_SHARE_LIMIT` (and the
+        distribution's limits)."""
         t0 = time.perf_counter()
+        if s.step % DISTRIBUTION_EVERY_STEPS == 0:
+            self.last["step"], self.last["columns"] = s.step, self._distribution(s)
         if math.isfinite(s.c0) and s.c0 > 0:
             ma = self.mach_now(s)
             rec = self.mach
