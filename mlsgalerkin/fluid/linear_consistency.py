@@ -50,10 +50,13 @@ deviation 0.13–0.18 % of :math:`\rho gH` (DNI: 0.67 %, growing), with or witho
 released. The dam break with impact completes at ``H/Δx = 20`` (P1 peak 2.83 against 2.59
 measured). ``verification/results/quiet_state/investigation.md`` has the ablations.
 
-**What it costs and breaks.** One scatter over the shape table (the residuals), one gather
-(the fits), one pass over the neighbour pairs (Shepard sums and normals) and a scatter over the
-surface particles' rows; numba kernels with a numpy reference
-(:func:`linear_consistency_force_reference`). Like the constant correction it gives up the exact momentum balance
+**What it costs and breaks.** Two compiled passes per force evaluation: a gather over the
+fluid rows of the shape-function table (the pressure fits, the Shepard sums and the normals;
+the table's rows are the neighbour rows) and a scatter over all its rows (the corrected force
+and the boundary term); numba kernels with a numpy reference
+(:func:`linear_consistency_force_reference`). About 2.5 times the internal force's scatter
+(``benchmarks/results/fluid_run.md`` has the whole-run cost). Periodic axes are handled by the
+minimum image of every offset. Like the constant correction it gives up the exact momentum balance
 :math:`\sum_i\mathbf f_i = 0` by the size of the integration residual times the pressure.
 """
 
@@ -70,104 +73,104 @@ from numpy.typing import NDArray
 from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.kernels import Kernel, get_kernel, kernel_f_df
-from mlsgalerkin.pairs import pair_offset
+from mlsgalerkin.pairs import image_component, pair_offset
+from mlsgalerkin.periodic import minimum_image
 
 __all__ = ["LinearConsistentPressure", "linear_consistency_force", "linear_consistency_force_reference",
            "surface_faces", "surface_faces_reference"]
 
 FloatArray = NDArray[np.float64]
-NO_PERIOD = (0.0, 0.0, 0.0)
 
 
 @numba.njit(parallel=True, cache=True)
-def _residuals(indptr, indices, values, grads, x, V, n_nodes, n_blocks):
-    """Per node ``j``: ``e_j`` (columns ``:d``), ``w_j`` (column ``d``) and ``D_j + w_j I``
-    (columns ``d+1:``, row-major), scattered from the rows ``k`` of the table by thread blocks."""
+def _corrected_scatter(indptr, indices, values, grads, x, V, fit, ok, face_of, delta, load, period, n_fluid,
+                       n_blocks):
+    """``Δf_j`` of the corrected fluid nodes ``j`` (``ok[j]``) in one scatter over the rows ``k`` of
+    the table, by thread blocks:
+
+    ``Δf_j −= V_k [∇N_j(x_k) (a_j + g_j·(x_k − x_j)) + N_j(x_k) g_j]`` (the DNI of the fit taken out
+    and its exact volume integral put in; ``fit[j] = (a_j, g_j)``) and, on the row of a surface
+    particle with face ``f = face_of[k] ≥ 0``, ``Δf_j += (N_j(x_k) + ∇N_j(x_k)·δ_f) load_f`` (the
+    boundary term). ``x_k − x_j`` is the minimum image along the periodic axes."""
     n_rows = indptr.shape[0] - 1
     dim = grads.shape[1]
-    nc = dim + 1 + dim * dim
-    slab = np.zeros((n_blocks, n_nodes, nc))
+    slab = np.zeros((n_blocks, n_fluid, dim))
     for blk in prange(n_blocks):
         for k in range((n_rows * blk) // n_blocks, (n_rows * (blk + 1)) // n_blocks):
             vk = V[k]
+            f = face_of[k] if k < n_fluid else -1
             for q in range(indptr[k], indptr[k + 1]):
                 j = indices[q]
+                if j >= n_fluid or not ok[j]:
+                    continue
+                fit_value = fit[j, 0]
+                for b in range(dim):
+                    fit_value += fit[j, 1 + b] * image_component(x[k, b] - x[j, b], period[b])
+                nv = values[q]
                 for a in range(dim):
-                    ga = grads[q, a] * vk
-                    slab[blk, j, a] += ga
+                    slab[blk, j, a] -= vk * (grads[q, a] * fit_value + nv * fit[j, 1 + a])
+                if f >= 0:
                     for b in range(dim):
-                        slab[blk, j, dim + 1 + a * dim + b] += ga * (x[k, b] - x[j, b])
-                slab[blk, j, dim] += values[q] * vk
-    out = np.zeros((n_nodes, nc))
-    for j in prange(n_nodes):
+                        nv += grads[q, b] * delta[f, b]
+                    for a in range(dim):
+                        slab[blk, j, a] += nv * load[f, a]
+    out = np.zeros((n_fluid, dim))
+    for j in prange(n_fluid):
         for blk in range(n_blocks):
-            for c in range(nc):
-                out[j, c] += slab[blk, j, c]
-        for a in range(dim):
-            out[j, dim + 1 + a * dim + a] += out[j, dim]
+            for a in range(dim):
+                out[j, a] += slab[blk, j, a]
     return out
 
 
 @numba.njit(parallel=True, cache=True)
-def _fit(indptr, indices, values, grads, p, rows, out):
-    """MLS value and gradient of ``p`` at the points ``rows``: ``out[r] = (Σ N p, Σ ∇N p)``."""
-    dim = grads.shape[1]
-    for r in prange(rows.shape[0]):
-        k = rows[r]
-        for c in range(dim + 1):
-            out[r, c] = 0.0
-        for q in range(indptr[k], indptr[k + 1]):
-            j = indices[q]
-            out[r, 0] += values[q] * p[j]
-            for a in range(dim):
-                out[r, 1 + a] += grads[q, a] * p[j]
-
-
-@numba.njit(parallel=True, cache=True)
-def _shepard_normal(x, h, volume, indptr, indices, n_fluid, kid, support, norm_d, period, c, normal):
-    """Shepard sum ``c_i = Σ_j W_ij V_j`` and ``Σ_j V_j W'(r)/r x_ji`` (the outward normal, not
-    normalised) of the fluid particles over all their neighbours."""
+def _row_sums(indptr, indices, values, grads, p, x, h, volume, n_fluid, kid, support, norm_d, period, fit, c,
+              normal):
+    """One gather over the fluid rows ``i`` of the table (whose rows are the neighbour rows):
+    the pressure fit ``fit[i] = (Σ_j N_j(x_i) p_j, Σ_j ∇N_j(x_i) p_j)``, the Shepard sum
+    ``c_i = Σ_j W_ij V_j`` and ``normal[i] = Σ_j V_j W'(r)/r x_ji`` (the outward normal, not
+    normalised), over all neighbours (fluid and wall); ``x_ji`` is the minimum image."""
     dim = x.shape[1]
     for i in prange(n_fluid):
         acc = 0.0
         n0 = n1 = n2 = 0.0
+        a0 = g0 = g1 = g2 = 0.0
         for q in range(indptr[i], indptr[i + 1]):
             j = indices[q]
+            pj = p[j]
+            a0 += values[q] * pj
+            g0 += grads[q, 0] * pj
+            if dim > 1:
+                g1 += grads[q, 1] * pj
+            if dim > 2:
+                g2 += grads[q, 2] * pj
             d0, d1, d2, r2 = pair_offset(x, i, j, period)
             hij = 0.5 * (h[i] + h[j])
+            reach = support * hij
+            if r2 >= reach * reach:     # beyond the support (the skin of the neighbour list)
+                continue
+            inv_h = 1.0 / hij
+            inv_hd = inv_h
+            for _ in range(dim - 1):
+                inv_hd *= inv_h
             r = math.sqrt(r2)
-            f, df = kernel_f_df(kid, r / hij, support, dim)
-            scale = volume[j] * norm_d / hij**dim
+            f, df = kernel_f_df(kid, r * inv_h, support, dim)
+            scale = volume[j] * norm_d * inv_hd
             acc += f * scale
             if r > 0.0:
-                s = scale * df / hij / r
+                s = scale * df * inv_h / r
                 n0 += s * d0
                 n1 += s * d1
                 n2 += s * d2
         c[i] = acc
+        fit[i, 0] = a0
+        fit[i, 1] = g0
         normal[i, 0] = n0
         if dim > 1:
+            fit[i, 2] = g1
             normal[i, 1] = n1
         if dim > 2:
+            fit[i, 3] = g2
             normal[i, 2] = n2
-
-
-@numba.njit(cache=True)
-def _face_scatter(indptr, indices, values, grads, owners, delta, load, n_nodes):
-    """``b_j = Σ_f N_j(y_f) load_f`` over the faces ``f`` of the particles ``owners``, with
-    ``N_j(y_f) = N_j(x_o) + ∇N_j(x_o)·δ_f`` from the owner's row of the table (``δ_f = y_f − x_o``)."""
-    dim = load.shape[1]
-    out = np.zeros((n_nodes, dim))
-    for f in range(owners.shape[0]):
-        o = owners[f]
-        for q in range(indptr[o], indptr[o + 1]):
-            j = indices[q]
-            nv = values[q]
-            for a in range(dim):
-                nv += grads[q, a] * delta[f, a]
-            for a in range(dim):
-                out[j, a] += nv * load[f, a]
-    return out
 
 
 def surface_faces_reference(s: FluidState, kernel: Kernel, surface: float) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
@@ -177,7 +180,7 @@ def surface_faces_reference(s: FluidState, kernel: Kernel, surface: float) -> tu
     ip = nb.indptr[: nf + 1]
     idx = nb.indices[: ip[-1]].astype(np.int64)
     rows = np.repeat(np.arange(nf), np.diff(ip))
-    xji = x[idx] - x[rows]
+    xji = minimum_image(x[idx] - x[rows], s.period)
     r = np.sqrt(np.einsum("pd,pd->p", xji, xji))
     hij = 0.5 * (s.h[rows] + s.h[idx])
     V = s.M / s.rho
@@ -205,10 +208,12 @@ def linear_consistency_force_reference(s: FluidState, kernel: Kernel, *, surface
     w = N.T @ V
     a = N @ p
     g = np.stack([G[b] @ p for b in range(d)], axis=1)
-    D = np.empty((x.shape[0], d, d))
-    for al in range(d):
-        for be in range(d):
-            D[:, al, be] = G[al].T @ (V * x[:, be]) - x[:, be] * e[:, al]
+    # D_j = Σ_k ∇N_j(x_k) ⊗ (x_k − x_j) V_k over the table's entries (k, j), minimum image
+    k_of = np.repeat(np.arange(t.n_points), np.diff(t.indptr))
+    j_of = t.indices.astype(np.int64)
+    offset = minimum_image(x[k_of] - x[j_of], s.period) * V[k_of, None]
+    D = np.stack([np.stack([np.bincount(j_of, t.gradients[:, al] * offset[:, be], minlength=x.shape[0])
+                            for be in range(d)], axis=1) for al in range(d)], axis=1)
     D += w[:, None, None] * np.eye(d)
     df = -a[:, None] * e - np.einsum("iab,ib->ia", D, g)
     c, n_s, surf = surface_faces_reference(s, kernel, surface)
@@ -222,45 +227,53 @@ def linear_consistency_force_reference(s: FluidState, kernel: Kernel, *, surface
     return out, ok, int(surf.size)
 
 
+def _sums(s: FluidState, kernel: Kernel, p: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``fit (n_fluid, d + 1)``, ``c (n_fluid,)`` and the unnormalised normals ``(n_fluid, d)`` of :func:`_row_sums`."""
+    t = s.table
+    nf, d = s.n_fluid, s.x.shape[1]
+    fit, c, normal = np.empty((nf, d + 1)), np.empty(nf), np.empty((nf, d))
+    _row_sums(t.indptr, t.indices, t.values, t.gradients, p, s.x, s.h, np.ascontiguousarray(s.volume, dtype=float),
+              nf, kernel.kernel_id, float(kernel.support), float(kernel.normalisation(d)), s.period, fit, c, normal)
+    return fit, c, normal
+
+
+def _faces(c: FloatArray, normal: FloatArray, surface: float) -> tuple[FloatArray, NDArray[np.int64]]:
+    """Unit outward normals ``(m, d)`` and indices ``(m,)`` of the particles with ``c < surface``."""
+    length = np.sqrt(np.einsum("id,id->i", normal, normal))
+    surf = np.flatnonzero((c < surface) & (length > 0))
+    return normal[surf] / length[surf, None], surf
+
+
 def surface_faces(s: FluidState, kernel: Kernel, surface: float) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
     """Shepard sums ``c (n_fluid,)`` of the fluid particles over all their neighbours, and the
     outward unit normals ``n (m, d)`` of the ``m`` fluid particles with ``c < surface`` and
     their indices ``(m,)`` (module docstring)."""
-    nf, d = s.n_fluid, s.x.shape[1]
-    c = np.empty(nf)
-    normal = np.zeros((nf, d))
-    nb = s.neighbors
-    _shepard_normal(s.x, s.h, s.M / s.rho, nb.indptr, nb.indices, nf, kernel.kernel_id, float(kernel.support),
-                    float(kernel.normalisation(d)), NO_PERIOD, c, normal)
-    length = np.sqrt(np.einsum("id,id->i", normal, normal))
-    surf = np.flatnonzero((c < surface) & (length > 0))
-    return c, normal[surf] / length[surf, None], surf
+    _, c, normal = _sums(s, kernel, np.zeros(s.n))
+    n_s, surf = _faces(c, normal, surface)
+    return c, n_s, surf
 
 
 def linear_consistency_force(s: FluidState, kernel: Kernel, *, surface: float = 0.85,
                              c_min: float = 0.75) -> tuple[FloatArray, NDArray[np.bool_], int]:
     """The correction ``Δf (n_fluid, d)`` (N per unit depth in 2D) of the module docstring at the
     current state (table, volumes, pressures), the mask ``(n_fluid,)`` of corrected fluid nodes
-    and the number of surface faces. Compiled kernels; :func:`linear_consistency_force_reference`
-    is the numpy version."""
+    and the number of surface faces. Two compiled passes: a gather over the table's fluid rows
+    (:func:`_row_sums`: pressure fits, Shepard sums, normals) and a scatter over all its rows
+    (:func:`_corrected_scatter`); :func:`linear_consistency_force_reference` is the numpy version."""
     t = s.table
     nf, d = s.n_fluid, s.x.shape[1]
-    V = np.ascontiguousarray(s.volume, dtype=float)
-    p = np.ascontiguousarray(s.p, dtype=float)
-    res = _residuals(t.indptr, t.indices, t.values, t.gradients, s.x, V, t.n_nodes,
-                     max(1, numba.get_num_threads()))
-    fit = np.empty((nf, d + 1))
-    _fit(t.indptr, t.indices, t.values, t.gradients, p, np.arange(nf, dtype=np.int64), fit)
-    e, Dw = res[:nf, :d], res[:nf, d + 1:].reshape(nf, d, d)
-    df = -fit[:, :1] * e - np.einsum("iab,ib->ia", Dw, fit[:, 1:])
-    c, n_s, surf = surface_faces(s, kernel, surface)
-    if surf.size:
-        delta = np.ascontiguousarray(0.5 * s.spacing * n_s)
-        ph = fit[surf, 0] + np.einsum("sd,sd->s", fit[surf, 1:], delta)
-        load = np.ascontiguousarray((ph * s.spacing ** (d - 1))[:, None] * n_s)
-        df += _face_scatter(t.indptr, t.indices, t.values, t.gradients, surf, delta, load, t.n_nodes)[:nf]
+    fit, c, normal = _sums(s, kernel, np.ascontiguousarray(s.p, dtype=float))
+    n_s, surf = _faces(c, normal, surface)
     ok = (c >= c_min) & (t.order[:nf] >= s.approximation_order)
-    return np.where(ok[:, None], df, 0.0), ok, int(surf.size)
+    face_of = np.full(nf, -1, dtype=np.int64)
+    face_of[surf] = np.arange(surf.size)
+    delta = np.ascontiguousarray(0.5 * s.spacing * n_s)
+    ph = fit[surf, 0] + np.einsum("sd,sd->s", fit[surf, 1:], delta)
+    load = np.ascontiguousarray((ph * s.spacing ** (d - 1))[:, None] * n_s)
+    df = _corrected_scatter(t.indptr, t.indices, t.values, t.gradients, s.x,
+                            np.ascontiguousarray(s.volume, dtype=float), fit, ok, face_of, delta, load,
+                            s.period, nf, max(1, numba.get_num_threads()))
+    return df, ok, int(surf.size)
 
 
 class LinearConsistentPressure(Effect):
@@ -292,9 +305,6 @@ class LinearConsistentPressure(Effect):
         return out
 
     def setup(self, state: FluidState, ctx: EffectContext) -> None:
-        if state.period is not None and np.any(np.asarray(state.period) > 0):
-            raise ValueError("LinearConsistentPressure does not support periodic axes yet (its surface faces are "
-                             "found without the minimum image); drop it from a periodic scheme")
         self._kernel = get_kernel(ctx.approximation.kernel)
 
     def force(self, s: FluidState) -> None:
