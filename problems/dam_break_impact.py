@@ -70,6 +70,7 @@ class Parameters:
     delta: float = 0.1                   #: density diffusion δ (δ-SPH); 0 drops it (–)
     shifting: str = "local"              #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
     consistent_integration: bool = False #: nodal integration that meets the integration constraint (VCI) (bool)
+    linear_consistency: bool = False  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     penalty_walls: bool = True           #: the tank's inner surface as a penalty-contact backstop behind the wall particles (bool)
     penalty_thickness: float = 0.25      #: contact thickness of the penalty surface / dx (–)
@@ -101,7 +102,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
                    negative_pressure=p.negative_pressure,
                    penalty_thickness=p.penalty_thickness * p.dx if p.penalty_walls else None,
-                   consistent_integration=p.consistent_integration, spacing=p.dx, h_factor=p.h_factor)
+                   consistent_integration=p.consistent_integration, linear_consistency=p.linear_consistency,
+                   spacing=p.dx, h_factor=p.h_factor)
     approximation = scheme.approximation
     probes = []
     for k, (lo, hi) in enumerate(sensor_heights(p), start=1):

@@ -392,3 +392,43 @@ def test_reused_buffers_give_identical_tables(rng):
     assert np.shares_memory(reused.values, first.values) or nb2.n_pairs > first.values.shape[0]
     np.testing.assert_array_equal(reused.values, fresh.values)
     np.testing.assert_array_equal(reused.gradients, fresh.gradients)
+
+
+@pytest.mark.parametrize(("dim", "order", "method", "fast", "periodic"), [
+    (2, 1, "mls", True, False), (2, 1, "rkpm", True, False), (2, 1, "mls", True, True),
+    (2, 2, "mls", False, False), (3, 1, "rkpm", False, True), (2, 1, "orthogonal", False, False)])
+def test_kernel_sum_is_the_shepard_sum_of_the_given_volumes(dim, order, method, fast, periodic):
+    # table.kernel_sum = Σ_j W(x_i − x_j, h_j) V_j and its gradient, from the shape-function pass
+    from mlsgalerkin.periodic import minimum_image
+    rng = np.random.default_rng(11)
+    side, dx = 1.0, 0.125 if dim == 2 else 1.0 / 6
+    g = np.arange(0.0, side, dx)
+    nodes = np.stack(np.meshgrid(*([g] * dim), indexing="ij"), axis=-1).reshape(-1, dim)
+    nodes += rng.uniform(-0.2, 0.2, nodes.shape) * dx
+    if periodic:
+        nodes %= side
+    h = np.full(nodes.shape[0], 1.3 * dx) * rng.uniform(0.95, 1.05, nodes.shape[0])
+    V = dx**dim * rng.uniform(0.9, 1.1, nodes.shape[0])
+    period = np.array([side] * dim + [0.0] * (3 - dim)) if periodic else None
+    k = get_kernel("cubic_spline")
+    radius = 2.0 * h.max()
+    nb = find_neighbors(nodes, nodes, radius=radius, period=period, lower=np.zeros(dim)) if periodic \
+        else find_neighbors(nodes, nodes, radius=radius)
+    t = evaluate_shape_functions(nodes, nodes, h, nb, k, order, method, V if method == "rkpm" else None,
+                                 fast=fast, period=period, kernel_sum_volumes=V)
+    rows = np.repeat(np.arange(nodes.shape[0]), np.diff(nb.indptr))
+    j = nb.indices.astype(np.int64)
+    d = minimum_image(nodes[rows] - nodes[j], period if periodic else np.zeros(3))   # x_i − x_j
+    r = np.sqrt(np.einsum("pd,pd->p", d, d))
+    c = np.bincount(rows, k.value(r, h[j], dim) * V[j], minlength=nodes.shape[0])
+    dwr = np.where(r > 0, k.derivative(r, h[j], dim) / np.where(r > 0, r, 1.0), 0.0) * V[j]
+    grad = np.stack([np.bincount(rows, dwr * d[:, a], minlength=nodes.shape[0]) for a in range(dim)], axis=1)
+    np.testing.assert_allclose(t.kernel_sum, c, rtol=1e-12)
+    if periodic:
+        assert 0.9 < np.median(c) < 1.1          # no boundary anywhere
+    else:
+        assert c.min() < 0.6 and c.max() > 0.9   # corners, edges and an interior
+    np.testing.assert_allclose(t.kernel_sum_gradient, grad, rtol=0, atol=1e-11 * np.abs(grad).max() + 1e-12)
+    plain = evaluate_shape_functions(nodes, nodes, h, nb, k, order, method, V if method == "rkpm" else None,
+                                     fast=fast, period=period)
+    assert plain.kernel_sum is None and np.array_equal(plain.values, t.values)   # asked for, or nothing

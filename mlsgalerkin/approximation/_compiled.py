@@ -12,6 +12,12 @@ scaled basis ``P_j = P((x_j - x)/s)``, ``M = Σ_j w_j P_j P_jᵀ``, ``γ = M⁻�
     ∂_k γ = M⁻¹ (∂_k p − ∂_k M γ),  ∂_k p = ∂P/∂ξ_k(0) / s,  ∂_k M = Σ_j ∂_k w_j P_j P_jᵀ
     ∂_k N_j = (∂_k γ·P_j) w_j + (γ·P_j) ∂_k w_j
 
+Kernel sum (on request, ``use_sum``): per point ``ksum[i] = Σ_j w_j sum_scale_j`` and
+``ksum_grad[i] = Σ_j ∇w_j sum_scale_j`` (the zeroth moment ``M_00`` with per-node factors: with
+``sum_scale_j = V_j`` on MLS weights, or ``V_j / vol_j`` on RKPM weights that carry ``vol_j``, it
+is the Shepard sum ``Σ_j W(x − x_j, h_j) V_j``), accumulated in the same pass as the moment
+matrix at no extra kernel evaluation.
+
 Fallback: the requested order is tried first, then each lower order (the basis is ordered by
 degree, so the lower-order moment matrix is the leading block); an order is accepted when its
 Cholesky factorisation succeeds with every pivot above ``RELATIVE_PIVOT_TOL`` times its diagonal
@@ -152,7 +158,8 @@ def _gram_schmidt(Pn, w, n, mo, L, dvec, ok_tol):
 @numba.njit(parallel=True, cache=True)
 def general_shape_kernel(
     points, nodes, h, inv_hd, vol, use_vol, kid, support, indptr, indices, exps, sizes,
-    order_req, cond_limit, orthogonal, values, grads, order_out, cond_out, period,
+    order_req, cond_limit, orthogonal, values, grads, order_out, cond_out, period, use_sum, sum_scale, ksum,
+    ksum_grad,
 ):
     """General path: any dimension, any order in ``sizes``; MLS/RKPM or Gram–Schmidt."""
     n_pts, dim = points.shape
@@ -213,6 +220,18 @@ def general_shape_kernel(
                     M[a, b] = M[b, a]
                     for k in range(dim):
                         dM[k, a, b] = dM[k, b, a]
+            if use_sum:
+                acc = 0.0
+                for k in range(dim):
+                    xi[k] = 0.0
+                for p in range(p0, p1):
+                    sc = sum_scale[indices[p]]
+                    acc += values[p] * sc
+                    for k in range(dim):
+                        xi[k] += grads[p, k] * sc
+                ksum[i] = acc
+                for k in range(dim):
+                    ksum_grad[i, k] = xi[k]
 
             used = -1
             mo = 1
@@ -295,7 +314,7 @@ def general_shape_kernel(
 @numba.njit(parallel=True, cache=True)
 def linear2d_shape_kernel(
     points, nodes, h, inv_hd, vol, use_vol, kid, support, indptr, indices, cond_limit,
-    values, grads, order_out, cond_out, period,
+    values, grads, order_out, cond_out, period, use_sum, sum_scale, ksum, ksum_grad,
 ):
     """Fused 2D linear MLS/RKPM: closed-form 3x3 inverse, Shepard inline as the fallback."""
     n_pts = points.shape[0]
@@ -319,6 +338,7 @@ def linear2d_shape_kernel(
         m00 = m01 = m02 = m11 = m12 = m22 = 0.0
         a00 = a01 = a02 = a11 = a12 = a22 = 0.0  # ∂M/∂x
         b00 = b01 = b02 = b11 = b12 = b22 = 0.0  # ∂M/∂y
+        k0 = kx = ky = 0.0                        # kernel sum and its gradient
         for p in range(p0, p1):
             j = indices[p]
             dx = image_component(xi_ - nodes[j, 0], px)
@@ -357,6 +377,15 @@ def linear2d_shape_kernel(
             b11 += wy * exx
             b12 += wy * exy
             b22 += wy * eyy
+            if use_sum:
+                sc_j = sum_scale[j]
+                k0 += w * sc_j
+                kx += wx * sc_j
+                ky += wy * sc_j
+        if use_sum:
+            ksum[i] = k0
+            ksum_grad[i, 0] = kx
+            ksum_grad[i, 1] = ky
         # adjugate inverse of the symmetric 3x3 moment matrix
         c00 = m11 * m22 - m12 * m12
         c01 = m02 * m12 - m01 * m22

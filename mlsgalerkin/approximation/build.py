@@ -209,6 +209,7 @@ def evaluate_shape_functions(
     fast: bool = True,
     out: ShapeTable | None = None,
     period: NDArray[np.float64] | None = None,
+    kernel_sum_volumes: NDArray[np.float64] | None = None,
 ) -> ShapeTable:
     """Compiled evaluation on validated arrays (no input checks; for solvers and benchmarks).
 
@@ -223,6 +224,10 @@ def evaluate_shape_functions(
 
     ``period (3,)`` (m): the periods of a periodic domain's axes (``0``: not periodic); the
     offsets ``x_j − x`` are then minimum images (:mod:`mlsgalerkin.periodic`). Default none.
+
+    ``kernel_sum_volumes (m,)`` (m^d): also fill the table's ``kernel_sum`` (the Shepard sum
+    ``Σ_j W(x_i − x_j, h_j) V_j`` of each point, dimensionless) and ``kernel_sum_gradient`` (1/m)
+    with these node volumes, in the same pass (MLS and RKPM; not the singular Shepard method).
     """
     period = as_period(period)
     kernel = get_kernel(kernel)
@@ -243,6 +248,16 @@ def evaluate_shape_functions(
     indptr, indices = neighbors.indptr, neighbors.indices
     use_vol = volumes is not None
     vol = volumes if use_vol else np.ones(1)
+    use_sum = kernel_sum_volumes is not None and method != "singular_shepard"
+    if use_sum:
+        # the kernels multiply their weights w_j = f(r/h_j) / h_j^d (times vol_j for RKPM) by
+        # sum_scale_j: the kernel's normalisation times V_j (divided by vol_j for RKPM)
+        v = kernel_sum_volumes / volumes if use_vol else kernel_sum_volumes
+        sum_scale = np.ascontiguousarray(float(kernel.normalisation(dim)) * v, dtype=np.float64)
+        ksum, ksum_grad = np.empty(points.shape[0]), np.empty((points.shape[0], dim))
+    else:
+        sum_scale, ksum, ksum_grad = np.ones(1), np.empty(0), np.empty((0, dim))
+    sum_args = (use_sum, sum_scale, ksum, ksum_grad)
     if method == "singular_shepard":
         _compiled.singular_shepard_kernel(
             points, nodes, kernel.support * h, indptr, indices, float(singular_exponent),
@@ -252,13 +267,14 @@ def evaluate_shape_functions(
         inv_hd = h ** (-float(dim))
         args = (points, nodes, h, inv_hd, vol, use_vol, kernel.kernel_id, kernel.support, indptr, indices)
         if fast and dim == 2 and order == 1 and method in ("mls", "rkpm"):
-            _compiled.linear2d_shape_kernel(*args, float(condition_limit), values, grads, order_out, cond, period)
+            _compiled.linear2d_shape_kernel(*args, float(condition_limit), values, grads, order_out, cond, period,
+                                            *sum_args)
         else:
             exps = monomial_exponents(dim, order)
             sizes = np.array([basis_size(dim, o) for o in range(order + 1)], dtype=np.int64)
             _compiled.general_shape_kernel(
                 *args, exps, sizes, order, float(condition_limit), method == "orthogonal",
-                values, grads, order_out, cond, period,
+                values, grads, order_out, cond, period, *sum_args,
             )
     failed = np.flatnonzero(order_out < 0)
     if failed.size:
@@ -271,6 +287,7 @@ def evaluate_shape_functions(
         points=points, indptr=indptr, indices=indices, values=values, gradients=grads,
         n_nodes=nodes.shape[0], requested_order=order, order=order_out.astype(np.int8),
         condition=cond, method=method, kernel=kernel.name, meta=buffers,
+        kernel_sum=ksum if use_sum else None, kernel_sum_gradient=ksum_grad if use_sum else None,
     )
 
 

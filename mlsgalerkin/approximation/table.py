@@ -35,6 +35,13 @@ class ShapeTable:
         1-norm condition number of the scaled moment matrix at the order used (1 for Shepard).
     method, kernel : str
         How the table was built (for reports).
+    kernel_sum : (n_points,) float array or None
+        The Shepard sum :math:`c(\mathbf x_i) = \sum_j W(\mathbf x_i - \mathbf x_j, h_j) V_j` of each
+        point (dimensionless; about 1 inside a body, about ½ on a flat free surface), when the
+        table was built with node volumes for it (``kernel_sum_volumes``); else None.
+    kernel_sum_gradient : (n_points, dim) float array or None
+        Its gradient :math:`\nabla c(\mathbf x_i)` (1/length; points into the body at a free
+        surface), or None.
     """
 
     points: NDArray[np.float64]
@@ -49,6 +56,8 @@ class ShapeTable:
     method: str = "mls"
     kernel: str = "cubic_spline"
     meta: dict = field(default_factory=dict, repr=False)
+    kernel_sum: NDArray[np.float64] | None = field(default=None, repr=False)
+    kernel_sum_gradient: NDArray[np.float64] | None = field(default=None, repr=False)
 
     # ---- sizes and diagnostics -------------------------------------------------------
     @property

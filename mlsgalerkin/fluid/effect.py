@@ -56,7 +56,7 @@ __all__ = ["SOLVER_QUANTITIES", "STAGES", "Effect", "EffectContext", "check_nonn
 STAGES = ("kinematics", "continuity", "pressure", "boundary", "stress", "force", "after_step", "drift")
 SOLVER_QUANTITIES = frozenset({
     "positions", "velocity", "density", "mass", "volume", "velocity_gradient",
-    "shape_functions", "neighbors", "continuity_rate",
+    "shape_functions", "neighbors", "continuity_rate", "kernel_sum",
 })
 
 

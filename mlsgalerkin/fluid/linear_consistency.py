@@ -31,7 +31,7 @@ the free-surface boundary term taken on the outer faces of the surface particles
     \mathbf b_i = \sum_s p^h(\mathbf y_s)\,N_i(\mathbf y_s)\,\mathbf n_s\,A_s,\qquad
     \mathbf y_s = \mathbf x_s + \tfrac12\Delta x\,\mathbf n_s,\quad A_s = \Delta x^{d-1},
 
-over the fluid particles ``s`` whose Shepard sum :math:`c_s = \sum_j W_{sj}V_j` (fluid and
+over the fluid particles ``s`` whose Shepard sum :math:`c_s = \sum_j W(\mathbf x_s - \mathbf x_j, h_j)V_j` (fluid and
 wall neighbours) is below ``surface`` (0.85; 0.76 on a lattice's top row, 0.99 on the row
 under it), with the outward normal :math:`\mathbf n_s = -\sum_j V_j\nabla_s W_{sj}/|\cdot|` and
 :math:`p^h(\mathbf y_s) = a_s + \mathbf g_s\cdot(\mathbf y_s - \mathbf x_s)` the surface particle's
@@ -50,19 +50,19 @@ deviation 0.13–0.18 % of :math:`\rho gH` (DNI: 0.67 %, growing), with or witho
 released. The dam break with impact completes at ``H/Δx = 20`` (P1 peak 2.83 against 2.59
 measured). ``verification/results/quiet_state/investigation.md`` has the ablations.
 
-**What it costs and breaks.** Two compiled passes per force evaluation: a gather over the
-fluid rows of the shape-function table (the pressure fits, the Shepard sums and the normals;
-the table's rows are the neighbour rows) and a scatter over all its rows (the corrected force
-and the boundary term); numba kernels with a numpy reference
-(:func:`linear_consistency_force_reference`). About 2.5 times the internal force's scatter
-(``benchmarks/results/fluid_run.md`` has the whole-run cost). Periodic axes are handled by the
-minimum image of every offset. Like the constant correction it gives up the exact momentum balance
-:math:`\sum_i\mathbf f_i = 0` by the size of the integration residual times the pressure.
+**What it costs and breaks.** The Shepard sums and their gradients come with the shape-function
+table (the solver asks for them when an effect reads ``kernel_sum``: three more sums in the
+moment-matrix pass); then two compiled passes per force evaluation: a gather over the fluid rows
+of the table (the pressure fits) and a scatter over all its rows (the corrected force and the
+boundary term); numba kernels with a numpy reference (:func:`linear_consistency_force_reference`).
+About 1.5 times the internal force's scatter (``benchmarks/results/fluid_run_impact.md`` has the
+whole-run cost). Periodic axes are handled by the minimum image of every offset. Like the
+constant correction it gives up the exact momentum balance :math:`\sum_i\mathbf f_i = 0` by the
+size of the integration residual times the pressure.
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numba
@@ -72,8 +72,8 @@ from numpy.typing import NDArray
 
 from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
-from mlsgalerkin.kernels import Kernel, get_kernel, kernel_f_df
-from mlsgalerkin.pairs import image_component, pair_offset
+from mlsgalerkin.kernels import Kernel
+from mlsgalerkin.pairs import image_component
 from mlsgalerkin.periodic import minimum_image
 
 __all__ = ["LinearConsistentPressure", "linear_consistency_force", "linear_consistency_force_reference",
@@ -123,54 +123,26 @@ def _corrected_scatter(indptr, indices, values, grads, x, V, fit, ok, face_of, d
 
 
 @numba.njit(parallel=True, cache=True)
-def _row_sums(indptr, indices, values, grads, p, x, h, volume, n_fluid, kid, support, norm_d, period, fit, c,
-              normal):
-    """One gather over the fluid rows ``i`` of the table (whose rows are the neighbour rows):
-    the pressure fit ``fit[i] = (Σ_j N_j(x_i) p_j, Σ_j ∇N_j(x_i) p_j)``, the Shepard sum
-    ``c_i = Σ_j W_ij V_j`` and ``normal[i] = Σ_j V_j W'(r)/r x_ji`` (the outward normal, not
-    normalised), over all neighbours (fluid and wall); ``x_ji`` is the minimum image."""
-    dim = x.shape[1]
+def _fit(indptr, indices, values, grads, p, n_fluid, fit):
+    """The pressure fits ``fit[i] = (Σ_j N_j(x_i) p_j, Σ_j ∇N_j(x_i) p_j)`` of the fluid rows
+    ``i < n_fluid`` of the table (a gather)."""
+    dim = grads.shape[1]
     for i in prange(n_fluid):
-        acc = 0.0
-        n0 = n1 = n2 = 0.0
         a0 = g0 = g1 = g2 = 0.0
         for q in range(indptr[i], indptr[i + 1]):
-            j = indices[q]
-            pj = p[j]
+            pj = p[indices[q]]
             a0 += values[q] * pj
             g0 += grads[q, 0] * pj
             if dim > 1:
                 g1 += grads[q, 1] * pj
             if dim > 2:
                 g2 += grads[q, 2] * pj
-            d0, d1, d2, r2 = pair_offset(x, i, j, period)
-            hij = 0.5 * (h[i] + h[j])
-            reach = support * hij
-            if r2 >= reach * reach:     # beyond the support (the skin of the neighbour list)
-                continue
-            inv_h = 1.0 / hij
-            inv_hd = inv_h
-            for _ in range(dim - 1):
-                inv_hd *= inv_h
-            r = math.sqrt(r2)
-            f, df = kernel_f_df(kid, r * inv_h, support, dim)
-            scale = volume[j] * norm_d * inv_hd
-            acc += f * scale
-            if r > 0.0:
-                s = scale * df * inv_h / r
-                n0 += s * d0
-                n1 += s * d1
-                n2 += s * d2
-        c[i] = acc
         fit[i, 0] = a0
         fit[i, 1] = g0
-        normal[i, 0] = n0
         if dim > 1:
             fit[i, 2] = g1
-            normal[i, 1] = n1
         if dim > 2:
             fit[i, 3] = g2
-            normal[i, 2] = n2
 
 
 def surface_faces_reference(s: FluidState, kernel: Kernel, surface: float) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
@@ -182,8 +154,8 @@ def surface_faces_reference(s: FluidState, kernel: Kernel, surface: float) -> tu
     rows = np.repeat(np.arange(nf), np.diff(ip))
     xji = minimum_image(x[idx] - x[rows], s.period)
     r = np.sqrt(np.einsum("pd,pd->p", xji, xji))
-    hij = 0.5 * (s.h[rows] + s.h[idx])
-    V = s.M / s.rho
+    hij = s.h[idx]
+    V = s.volume          # the volumes M/ρ of the evaluation the table was built for
     c = np.bincount(rows, kernel.value(r, hij, d) * V[idx], minlength=nf)
     safe = np.where(r > 0, r, 1.0)
     dw = np.where(r > 0, kernel.derivative(r, hij, d) / safe, 0.0) * V[idx]     # V_j W'(r)/r
@@ -227,16 +199,6 @@ def linear_consistency_force_reference(s: FluidState, kernel: Kernel, *, surface
     return out, ok, int(surf.size)
 
 
-def _sums(s: FluidState, kernel: Kernel, p: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``fit (n_fluid, d + 1)``, ``c (n_fluid,)`` and the unnormalised normals ``(n_fluid, d)`` of :func:`_row_sums`."""
-    t = s.table
-    nf, d = s.n_fluid, s.x.shape[1]
-    fit, c, normal = np.empty((nf, d + 1)), np.empty(nf), np.empty((nf, d))
-    _row_sums(t.indptr, t.indices, t.values, t.gradients, p, s.x, s.h, np.ascontiguousarray(s.volume, dtype=float),
-              nf, kernel.kernel_id, float(kernel.support), float(kernel.normalisation(d)), s.period, fit, c, normal)
-    return fit, c, normal
-
-
 def _faces(c: FloatArray, normal: FloatArray, surface: float) -> tuple[FloatArray, NDArray[np.int64]]:
     """Unit outward normals ``(m, d)`` and indices ``(m,)`` of the particles with ``c < surface``."""
     length = np.sqrt(np.einsum("id,id->i", normal, normal))
@@ -244,26 +206,33 @@ def _faces(c: FloatArray, normal: FloatArray, surface: float) -> tuple[FloatArra
     return normal[surf] / length[surf, None], surf
 
 
-def surface_faces(s: FluidState, kernel: Kernel, surface: float) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
+def surface_faces(s: FluidState, surface: float) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
     """Shepard sums ``c (n_fluid,)`` of the fluid particles over all their neighbours, and the
     outward unit normals ``n (m, d)`` of the ``m`` fluid particles with ``c < surface`` and
-    their indices ``(m,)`` (module docstring)."""
-    _, c, normal = _sums(s, kernel, np.zeros(s.n))
-    n_s, surf = _faces(c, normal, surface)
+    their indices ``(m,)`` (module docstring): the table's ``kernel_sum`` and the opposite of
+    its gradient, which the solver fills when an effect reads ``kernel_sum``."""
+    t = s.table
+    if t.kernel_sum is None:
+        raise ValueError("the shape-function table carries no Shepard sums: build it with kernel_sum_volumes "
+                         "(the fluid solver does when an effect reads 'kernel_sum')")
+    nf = s.n_fluid
+    c = t.kernel_sum[:nf]
+    n_s, surf = _faces(c, -t.kernel_sum_gradient[:nf], surface)
     return c, n_s, surf
 
 
-def linear_consistency_force(s: FluidState, kernel: Kernel, *, surface: float = 0.85,
+def linear_consistency_force(s: FluidState, *, surface: float = 0.85,
                              c_min: float = 0.75) -> tuple[FloatArray, NDArray[np.bool_], int]:
     """The correction ``Δf (n_fluid, d)`` (N per unit depth in 2D) of the module docstring at the
-    current state (table, volumes, pressures), the mask ``(n_fluid,)`` of corrected fluid nodes
-    and the number of surface faces. Two compiled passes: a gather over the table's fluid rows
-    (:func:`_row_sums`: pressure fits, Shepard sums, normals) and a scatter over all its rows
-    (:func:`_corrected_scatter`); :func:`linear_consistency_force_reference` is the numpy version."""
+    current state (table with its Shepard sums, volumes, pressures), the mask ``(n_fluid,)`` of
+    corrected fluid nodes and the number of surface faces. Two compiled passes: a gather over the
+    table's fluid rows (:func:`_fit`) and a scatter over all its rows (:func:`_corrected_scatter`);
+    :func:`linear_consistency_force_reference` is the numpy version."""
     t = s.table
     nf, d = s.n_fluid, s.x.shape[1]
-    fit, c, normal = _sums(s, kernel, np.ascontiguousarray(s.p, dtype=float))
-    n_s, surf = _faces(c, normal, surface)
+    c, n_s, surf = surface_faces(s, surface)
+    fit = np.empty((nf, d + 1))
+    _fit(t.indptr, t.indices, t.values, t.gradients, np.ascontiguousarray(s.p, dtype=float), nf, fit)
     ok = (c >= c_min) & (t.order[:nf] >= s.approximation_order)
     face_of = np.full(nf, -1, dtype=np.int64)
     face_of[surf] = np.arange(surf.size)
@@ -284,11 +253,10 @@ class LinearConsistentPressure(Effect):
 
     name = "linear_consistent_pressure"
     stages = ("force",)
-    reads = ("shape_functions", "volume")
+    reads = ("shape_functions", "volume", "kernel_sum")
 
     def __init__(self, *, surface: float = 0.85, c_min: float = 0.75) -> None:
         self.surface, self.c_min = float(surface), float(c_min)
-        self._kernel: Kernel | None = None
         self.corrected_share = float("nan")
         self.faces = 0
 
@@ -304,11 +272,8 @@ class LinearConsistentPressure(Effect):
             out.append("LinearConsistentPressure needs a linear (or higher) basis: the pressure fit is linear")
         return out
 
-    def setup(self, state: FluidState, ctx: EffectContext) -> None:
-        self._kernel = get_kernel(ctx.approximation.kernel)
-
     def force(self, s: FluidState) -> None:
-        df, ok, faces = linear_consistency_force(s, self._kernel, surface=self.surface, c_min=self.c_min)
+        df, ok, faces = linear_consistency_force(s, surface=self.surface, c_min=self.c_min)
         s.force[s.fluid] += df
         self.corrected_share = float(np.mean(ok)) if ok.size else float("nan")
         self.faces = faces

@@ -312,6 +312,8 @@ class FluidSolver(Solver):
         self._lower = self.periodic.lower(s.dim) if self.periodic is not None else None
         self.search_radius = self.kernel.support * s.h + ap.skin * s.spacing
         self._stage_effects = {st: [e for e in self.effects if st in e.stages] for st in STAGES}
+        # the Shepard sums ride on the shape-function pass when an effect reads them
+        self._kernel_sum = any("kernel_sum" in e.reads for e in self.effects)
         self.timer = StageTimer()
         self.fallback_points = 0
         self.fallback_steps = 0
@@ -462,7 +464,9 @@ class FluidSolver(Solver):
 
     def _shape_functions(self, volumes: np.ndarray | None = None) -> None:
         """MLS/RKPM table at the current positions with the current neighbour list (RKPM:
-        with the volumes ``M/ρ`` of now, or the given ones when restoring a checkpoint)."""
+        with the volumes ``M/ρ`` of now, or the given ones when restoring a checkpoint), with the
+        Shepard sums ``table.kernel_sum`` of the volumes ``M/ρ`` of now when an effect reads
+        ``kernel_sum``."""
         s = self._state
         ap = self.approximation
         if ap.method == "rkpm":
@@ -472,6 +476,7 @@ class FluidSolver(Solver):
         s.table = evaluate_shape_functions(
             s.x, s.x, s.h, s.neighbors, self.kernel, s.approximation_order, ap.method, self._table_volumes,
             condition_limit=ap.condition_limit, out=s.table, period=s.period,
+            kernel_sum_volumes=s.M / s.rho if self._kernel_sum else None,
         )
         s.fallback_count = int(np.count_nonzero(s.table.order[: s.n_fluid] < s.approximation_order))
 
