@@ -124,7 +124,10 @@ def test_compiled_kernels_agree_with_the_numpy_reference_across_a_periodic_seam(
     k = get_kernel("cubic_spline")
     f1, ok1, m1 = linear_consistency_force(s)
     f2, ok2, m2 = linear_consistency_force_reference(s, k)
-    assert ok1.all() and np.array_equal(ok1, ok2) and m1 == m2 == 0      # no free surface anywhere
+    assert np.array_equal(ok1, ok2) and m1 == m2 == 0      # no free surface anywhere
+    # a wave of 16 spacings curves by more than half its slope times dx over a row except where it
+    # is steepest: those nodes are corrected, the crests and troughs keep direct nodal integration
+    assert 0.1 < ok1.mean() < 0.9
     scale = np.abs(f2).max()
     assert scale > 0
     np.testing.assert_allclose(f1, f2, rtol=0, atol=1e-10 * scale)

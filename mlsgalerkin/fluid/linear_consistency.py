@@ -44,11 +44,21 @@ wave reaching the surface) pushes it, as it should. Wall particles extend the fl
 fictitious layer), so walls need no boundary term. The correction is applied at fluid nodes
 with :math:`c_i \ge` ``c_min`` (0.75) and shape functions of full order; splashes keep DNI.
 
+**Only where the pressure is linear.** The correction is exact for the linear part of the
+pressure, and its collocated term :math:`-w_i\mathbf g_i` is not the transpose of the
+continuity equation's divergence, so, unlike DNI, it does not conserve the discrete energy.
+Applied at every node of the dam break with impact it fed pressure bursts at the downstream
+wall (P1 up to 13 ρgH at ``H/Δx = 20``, 5.6 without it). A node therefore keeps DNI where the
+pressure over its support departs from the node's linear fit by more than
+``linear_tol · |g_i| Δx`` (0.5): :math:`\max_j |p_j - a_i - \mathbf g_i\cdot(\mathbf x_j - \mathbf x_i)|`
+over its row. Water at rest (a linear pressure) is corrected everywhere; an impact, a pressure
+wave's crest or a flow whose pressure curves over a few spacings keeps DNI there.
+
 **Measured** (1 m × 0.3 m tank at rest, ``Δx = 0.02`` m, ``α = 0.02``, ``δ = 0.1``, local
 shifting, 2 s): largest speed 0.03 % of :math:`\sqrt{gH}` (DNI: 3.7 %, growing), pressure RMS
 deviation 0.13–0.18 % of :math:`\rho gH` (DNI: 0.67 %, growing), with or without tension
-released. The dam break with impact completes at ``H/Δx = 20`` (P1 peak 2.83 against 2.59
-measured). ``verification/results/quiet_state/investigation.md`` has the ablations.
+released. The dam break with impact at ``H/Δx = 20`` and 40: see
+``verification/results/quiet_state/investigation.md`` §7, with the ablations.
 
 **What it costs and breaks.** The Shepard sums and their gradients come with the shape-function
 table (the solver asks for them when an effect reads ``kernel_sum``: three more sums in the
@@ -123,9 +133,11 @@ def _corrected_scatter(indptr, indices, values, grads, x, V, fit, ok, face_of, d
 
 
 @numba.njit(parallel=True, cache=True)
-def _fit(indptr, indices, values, grads, p, n_fluid, fit):
-    """The pressure fits ``fit[i] = (Σ_j N_j(x_i) p_j, Σ_j ∇N_j(x_i) p_j)`` of the fluid rows
-    ``i < n_fluid`` of the table (a gather)."""
+def _fit(indptr, indices, values, grads, p, x, period, n_fluid, fit, departure):
+    """The pressure fits ``fit[i] = (a_i, g_i) = (Σ_j N_j(x_i) p_j, Σ_j ∇N_j(x_i) p_j)`` of the
+    fluid rows ``i < n_fluid`` of the table (a gather), and how far the pressure departs from
+    its fit over the row, ``departure[i] = max_j |p_j − a_i − g_i·(x_j − x_i)|`` (Pa; minimum
+    image along periodic axes)."""
     dim = grads.shape[1]
     for i in prange(n_fluid):
         a0 = g0 = g1 = g2 = 0.0
@@ -143,6 +155,16 @@ def _fit(indptr, indices, values, grads, p, n_fluid, fit):
             fit[i, 2] = g1
         if dim > 2:
             fit[i, 3] = g2
+        worst = 0.0
+        for q in range(indptr[i], indptr[i + 1]):
+            j = indices[q]
+            r = p[j] - a0 - g0 * image_component(x[j, 0] - x[i, 0], period[0])
+            if dim > 1:
+                r -= g1 * image_component(x[j, 1] - x[i, 1], period[1])
+            if dim > 2:
+                r -= g2 * image_component(x[j, 2] - x[i, 2], period[2])
+            worst = max(worst, abs(r))
+        departure[i] = worst
 
 
 def surface_faces_reference(s: FluidState, kernel: Kernel, surface: float) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
@@ -167,8 +189,8 @@ def surface_faces_reference(s: FluidState, kernel: Kernel, surface: float) -> tu
     return c, n_s, surf
 
 
-def linear_consistency_force_reference(s: FluidState, kernel: Kernel, *, surface: float = 0.85,
-                                       c_min: float = 0.75) -> tuple[FloatArray, NDArray[np.bool_], int]:
+def linear_consistency_force_reference(s: FluidState, kernel: Kernel, *, surface: float = 0.85, c_min: float = 0.75,
+                                       linear_tol: float = 0.5) -> tuple[FloatArray, NDArray[np.bool_], int]:
     """Numpy version of :func:`linear_consistency_force` (tests), with sparse matrices."""
     t = s.table
     nf, x, d = s.n_fluid, s.x, s.x.shape[1]
@@ -194,9 +216,27 @@ def linear_consistency_force_reference(s: FluidState, kernel: Kernel, *, surface
         Nf = N[surf] + sum(G[b][surf].multiply(delta[:, b:b + 1]) for b in range(d))   # N_j(y_s), first order
         ph = a[surf] + np.einsum("sd,sd->s", g[surf], delta)            # p^h(y_s) of the linear fit
         df += Nf.T @ ((ph * s.spacing ** (d - 1))[:, None] * n_s)
-    ok = (c >= c_min) & (t.order[:nf] >= s.approximation_order)
+    # departure of the pressure from each fluid row's fit, over the row's entries (minimum image)
+    rows = k_of[: t.indptr[nf]]
+    cols = j_of[: t.indptr[nf]]
+    off = minimum_image(x[cols] - x[rows], s.period)
+    r = np.abs(p[cols] - a[rows] - np.einsum("pd,pd->p", g[rows], off))
+    departure = np.zeros(nf)
+    np.maximum.at(departure, rows, r)
+    slope = np.sqrt(np.einsum("id,id->i", g[:nf], g[:nf]))
+    ok = (c >= c_min) & (t.order[:nf] >= s.approximation_order) & (departure <= linear_tol * slope * s.spacing)
     out = np.where(ok[:, None], df[:nf], 0.0)
     return out, ok, int(surf.size)
+
+
+def _corrected_nodes(s: FluidState, c: FloatArray, fit: FloatArray, departure: FloatArray, c_min: float,
+                     linear_tol: float) -> NDArray[np.bool_]:
+    """The fluid nodes that get the correction: Shepard sum at least ``c_min``, shape functions of
+    full order, and a pressure within ``linear_tol · |g_i| Δx`` of its linear fit over the row."""
+    nf = s.n_fluid
+    slope = np.sqrt(np.einsum("id,id->i", fit[:, 1:], fit[:, 1:]))
+    return ((c >= c_min) & (s.table.order[:nf] >= s.approximation_order)
+            & (departure <= linear_tol * slope * s.spacing))
 
 
 def _faces(c: FloatArray, normal: FloatArray, surface: float) -> tuple[FloatArray, NDArray[np.int64]]:
@@ -221,8 +261,8 @@ def surface_faces(s: FluidState, surface: float) -> tuple[FloatArray, FloatArray
     return c, n_s, surf
 
 
-def linear_consistency_force(s: FluidState, *, surface: float = 0.85,
-                             c_min: float = 0.75) -> tuple[FloatArray, NDArray[np.bool_], int]:
+def linear_consistency_force(s: FluidState, *, surface: float = 0.85, c_min: float = 0.75,
+                             linear_tol: float = 0.5) -> tuple[FloatArray, NDArray[np.bool_], int]:
     """The correction ``Δf (n_fluid, d)`` (N per unit depth in 2D) of the module docstring at the
     current state (table with its Shepard sums, volumes, pressures), the mask ``(n_fluid,)`` of
     corrected fluid nodes and the number of surface faces. Two compiled passes: a gather over the
@@ -231,9 +271,10 @@ def linear_consistency_force(s: FluidState, *, surface: float = 0.85,
     t = s.table
     nf, d = s.n_fluid, s.x.shape[1]
     c, n_s, surf = surface_faces(s, surface)
-    fit = np.empty((nf, d + 1))
-    _fit(t.indptr, t.indices, t.values, t.gradients, np.ascontiguousarray(s.p, dtype=float), nf, fit)
-    ok = (c >= c_min) & (t.order[:nf] >= s.approximation_order)
+    fit, departure = np.empty((nf, d + 1)), np.empty(nf)
+    _fit(t.indptr, t.indices, t.values, t.gradients, np.ascontiguousarray(s.p, dtype=float), s.x, s.period, nf, fit,
+         departure)
+    ok = _corrected_nodes(s, c, fit, departure, c_min, linear_tol)
     face_of = np.full(nf, -1, dtype=np.int64)
     face_of[surf] = np.arange(surf.size)
     delta = np.ascontiguousarray(0.5 * s.spacing * n_s)
@@ -255,29 +296,34 @@ class LinearConsistentPressure(Effect):
     stages = ("force",)
     reads = ("shape_functions", "volume", "kernel_sum")
 
-    def __init__(self, *, surface: float = 0.85, c_min: float = 0.75) -> None:
-        self.surface, self.c_min = float(surface), float(c_min)
+    def __init__(self, *, surface: float = 0.85, c_min: float = 0.75, linear_tol: float = 0.5) -> None:
+        self.surface, self.c_min, self.linear_tol = float(surface), float(c_min), float(linear_tol)
         self.corrected_share = float("nan")
         self.faces = 0
 
     def __repr__(self) -> str:
-        return f"LinearConsistentPressure(surface={self.surface:g}, c_min={self.c_min:g})"
+        return (f"LinearConsistentPressure(surface={self.surface:g}, c_min={self.c_min:g}, "
+                f"linear_tol={self.linear_tol:g})")
 
     def check(self, ctx: EffectContext) -> list[str]:
         out = []
         if not (0.0 < self.c_min <= self.surface < 1.0):
             out.append(f"LinearConsistentPressure: need 0 < c_min <= surface < 1 (Shepard sums), got c_min = "
                        f"{self.c_min:g}, surface = {self.surface:g}; the defaults are 0.75 and 0.85")
+        if not self.linear_tol > 0.0:
+            out.append(f"LinearConsistentPressure: linear_tol must be > 0 (a multiple of |grad p| dx), got "
+                       f"{self.linear_tol:g}; the default is 0.5")
         if ctx.approximation.order < 1:
             out.append("LinearConsistentPressure needs a linear (or higher) basis: the pressure fit is linear")
         return out
 
     def force(self, s: FluidState) -> None:
-        df, ok, faces = linear_consistency_force(s, surface=self.surface, c_min=self.c_min)
+        df, ok, faces = linear_consistency_force(s, surface=self.surface, c_min=self.c_min,
+                                                 linear_tol=self.linear_tol)
         s.force[s.fluid] += df
         self.corrected_share = float(np.mean(ok)) if ok.size else float("nan")
         self.faces = faces
 
     def summary(self) -> dict[str, Any]:
         return {"corrected_share_at_end": self.corrected_share, "surface_faces_at_end": self.faces,
-                "surface": self.surface, "c_min": self.c_min}
+                "surface": self.surface, "c_min": self.c_min, "linear_tol": self.linear_tol}
