@@ -174,9 +174,9 @@ def test_no_slip_continues_a_shear_profile_into_every_layer(rng, jitter):
     v = np.column_stack([U + a * x[:, 1] + b * x[:, 1] ** 2, np.zeros(n)])
     is_fluid = np.arange(n) < n_f
     n_w = n - n_f
-    args = dict(wall_ids=np.arange(n_f, n, dtype=np.int64), indptr=table.indptr, indices=table.indices, x=x, v=v,
-                h=h, is_fluid=is_fluid, kernel=KERNEL, spacing=DX,
-                wall_velocity=np.tile([U, 0.0], (n_w, 1)), normals=np.tile([0.0, 1.0], (n_w, 1)))
+    args = {"wall_ids": np.arange(n_f, n, dtype=np.int64), "indptr": table.indptr, "indices": table.indices,
+            "x": x, "v": v, "h": h, "is_fluid": is_fluid, "kernel": KERNEL, "spacing": DX,
+            "wall_velocity": np.tile([U, 0.0], (n_w, 1)), "normals": np.tile([0.0, 1.0], (n_w, 1))}
     v_w, depth = no_slip_wall_velocity(**args)
     y_w = floor[:, 1]
     np.testing.assert_allclose(depth, -y_w, rtol=1e-12)

@@ -7,7 +7,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mlsgalerkin.fluid.viscous_stabilisation import viscous_residual_force, viscous_residual_force_reference
+from mlsgalerkin.fluid.viscous_stabilisation import (
+    viscous_residual_force,
+    viscous_residual_force_reference,
+)
 from mlsgalerkin.kernels import get_kernel
 from mlsgalerkin.neighbors import find_neighbors
 from mlsgalerkin.problem import run_problem
@@ -29,11 +32,11 @@ def inputs(per_axis=12, jitter=0.15, seed=0, periodic=True):
     table = find_neighbors(x, x, radius=kernel.support * 1.3 * dx, period=period[:2] if periodic else None,
                            lower=np.zeros(2) if periodic else None)
     rng = np.random.default_rng(seed + 1)
-    return dict(x=x, v=rng.normal(size=(n, 2)), L=rng.normal(size=(n, 2, 2)), mu=rng.uniform(0.5, 1.5, n),
-                volume=np.full(n, dx * dx) * rng.uniform(0.9, 1.1, n), h=h,
-                indptr=np.ascontiguousarray(table.indptr, dtype=np.int64),
-                indices=np.ascontiguousarray(table.indices, dtype=np.int32), kernel=kernel,
-                active=rng.uniform(size=n) < 0.8, period=period)
+    return {"x": x, "v": rng.normal(size=(n, 2)), "L": rng.normal(size=(n, 2, 2)), "mu": rng.uniform(0.5, 1.5, n),
+            "volume": np.full(n, dx * dx) * rng.uniform(0.9, 1.1, n), "h": h,
+            "indptr": np.ascontiguousarray(table.indptr, dtype=np.int64),
+            "indices": np.ascontiguousarray(table.indices, dtype=np.int32), "kernel": kernel,
+            "active": rng.uniform(size=n) < 0.8, "period": period}
 
 
 @pytest.mark.parametrize("periodic", [True, False])

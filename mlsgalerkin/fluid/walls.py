@@ -27,8 +27,9 @@ weight. The wall-particle velocity that enters the velocity approximation is
   Poiseuille) is continued exactly into every layer. (Adami, Hu & Adams 2012's ``2 v_wall − ṽ_w`` with the Shepard mean
   ``ṽ_w`` gave all layers about the velocity of the fluid 1.5 Δx from the wall and the deepest
   layer, with no fluid in reach, ``v_wall``: in plane Poiseuille flow, H/Δx = 20, the layers at
-  0.5, 1.5, 2.5 Δx got −0.109, −0.102, 0 instead of −0.097, −0.28, −0.43 of ``u_max``, and the
-  rows of the channel alternated by 19 % of ``u_max``.) Needs the wall normals;
+  0.5, 1.5, 2.5 Δx got −0.109, −0.102, 0 where the parabola continued has −0.103, −0.323,
+  −0.563 of ``u_max`` (the fit: −0.102, −0.321, −0.561), and the rows of the channel alternated
+  by 19 % of ``u_max``.) Needs the wall normals;
 - ``"free_slip"``: ``v_w = ṽ_w − 2 ((ṽ_w − v_wall)·n) n`` (normal component mirrored,
   tangential component continued; needs the wall normals ``n``);
 - ``"fixed"``: ``v_w = v_wall``.
@@ -132,6 +133,9 @@ def extrapolate_wall_state(
     rho_ref: NDArray[np.float64], period: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Wall pressure ``(n_w,)`` Pa, density ``(n_w,)`` kg/m³ and velocity ``(n_w, d)`` m/s.
+
+    The ``"no_slip"`` velocity here is the Shepard mirror ``2 v_wall − ṽ_w`` (kept for
+    comparison); :class:`Walls` takes the no-slip velocity from :func:`no_slip_wall_velocity`.
 
     ``wall_ids (n_w,)`` index the wall rows of the CSR neighbour table over all particles;
     ``x, v, rho, p, h, is_fluid`` are over all particles; ``g_minus_a`` is the gravity minus
@@ -248,17 +252,17 @@ def _no_slip_velocity(wall_ids, indptr, indices, x, v, h, is_fluid, is_wall, kid
             phi[2] = -dn * n2
         phi[dim] = dn * dn
         value = np.zeros(dim)
-        if not _fit_at(P, Q, phi, m, dim, value):   # too few fluid points for the curvature
-            if not _fit_at(P, Q, phi, dim, dim, value):   # nor for the linear fit: the normal slope
-                ann = 0.0
-                for a in range(dim):
-                    for b in range(dim):
-                        ann += normals[t, a] * P[a, b] * normals[t, b]
+        # too few fluid points for the curvature, nor for the linear fit: the normal slope alone
+        if not _fit_at(P, Q, phi, m, dim, value) and not _fit_at(P, Q, phi, dim, dim, value):
+            ann = 0.0
+            for a in range(dim):
                 for b in range(dim):
-                    qn = 0.0
-                    for a in range(dim):
-                        qn += normals[t, a] * Q[a, b]
-                    value[b] = -dn * qn / ann if ann > 0.0 else 0.0
+                    ann += normals[t, a] * P[a, b] * normals[t, b]
+            for b in range(dim):
+                qn = 0.0
+                for a in range(dim):
+                    qn += normals[t, a] * Q[a, b]
+                value[b] = -dn * qn / ann if ann > 0.0 else 0.0
         for b in range(dim):
             v_out[t, b] = wall_velocity[t, b] + value[b]
 
