@@ -64,6 +64,10 @@ SLIP_MODES = {"no_slip": 0, "free_slip": 1, "fixed": 2}
 #: it drops the curvature term, then the tangential slopes.
 FIT_CONDITION_LIMIT = 1e8
 
+#: A no-slip wall particle with a wall particle in reach whose normal is turned from its own by
+#: more than ``arccos(CORNER_COSINE)`` (25°) is in a corner: no flat-wall fit, the Shepard mirror.
+CORNER_COSINE = 0.9
+
 
 @numba.njit(parallel=True, cache=True)
 def _extrapolate(
@@ -188,7 +192,7 @@ def extrapolate_wall_state_reference(
 
 
 @numba.njit(parallel=True, cache=True)
-def _no_slip_velocity(wall_ids, indptr, indices, x, v, h, is_fluid, is_wall, kid, support, dim, spacing,
+def _no_slip_velocity(wall_ids, indptr, indices, x, v, h, is_fluid, wall_index, kid, support, dim, spacing,
                       wall_velocity, normals, period, v_out, depth_out):
     for t in prange(wall_ids.shape[0]):
         w = wall_ids[t]
@@ -196,17 +200,29 @@ def _no_slip_velocity(wall_ids, indptr, indices, x, v, h, is_fluid, is_wall, kid
         n1 = normals[t, 1] if dim > 1 else 0.0
         n2 = normals[t, 2] if dim > 2 else 0.0
         # the wall particle of this one's column nearest the fluid (largest offset along n)
+        # and whether a wall particle in reach faces another way (a corner: no flat-wall fit)
         top = w
         top_proj = 0.0
+        corner = False
+        reach2 = (support * h[w]) ** 2
         for q in range(indptr[w], indptr[w + 1]):
             j = indices[q]
-            if j == w or not is_wall[j]:
+            if j == w or wall_index[j] < 0:
                 continue
             d0, d1, d2, r2 = pair_offset(x, w, j, period)          # x_j − x_w
             proj = d0 * n0 + d1 * n1 + d2 * n2
             lateral2 = r2 - proj * proj
             if proj > top_proj and lateral2 < (0.25 * spacing) ** 2:
                 top, top_proj = j, proj
+            if r2 < reach2:
+                tj = wall_index[j]
+                cos = normals[tj, 0] * n0
+                if dim > 1:
+                    cos += normals[tj, 1] * n1
+                if dim > 2:
+                    cos += normals[tj, 2] * n2
+                if cos < CORNER_COSINE:
+                    corner = True
         depth = top_proj + 0.5 * spacing
         depth_out[t] = depth
         # x_s − x_top: the surface point, half a spacing beyond the top particle along n
@@ -217,6 +233,7 @@ def _no_slip_velocity(wall_ids, indptr, indices, x, v, h, is_fluid, is_wall, kid
         # weighted least squares over the fluid in reach of the top particle, in units of the
         # spacing: v_f − v_wall ≈ B ρ + c (ρ·n)², ρ = (x_f − x_s)/Δx; basis (ρ_0 … ρ_{d−1}, (ρ·n)²)
         m = dim + 1
+        du2_max = 0.0
         P = np.zeros((m, m))
         Q = np.zeros((m, dim))
         phi = np.zeros(m)
@@ -238,11 +255,16 @@ def _no_slip_velocity(wall_ids, indptr, indices, x, v, h, is_fluid, is_wall, kid
                 phi[2] = rho2
             rn = rho0 * n0 + rho1 * n1 + rho2 * n2
             phi[dim] = rn * rn
+            du2 = 0.0
             for a in range(m):
                 for b in range(m):
                     P[a, b] += wgt * phi[a] * phi[b]
                 for b in range(dim):
                     Q[a, b] += wgt * phi[a] * (v[f, b] - wall_velocity[t, b])
+            for b in range(dim):
+                du2 += (v[f, b] - wall_velocity[t, b]) ** 2
+            if du2 > du2_max:
+                du2_max = du2
         # at the particle, ρ = −(d_w/Δx) n: the basis there
         dn = depth / spacing
         phi[0] = -dn * n0
@@ -263,6 +285,28 @@ def _no_slip_velocity(wall_ids, indptr, indices, x, v, h, is_fluid, is_wall, kid
                 for a in range(dim):
                     qn += normals[t, a] * Q[a, b]
                 value[b] = -dn * qn / ann if ann > 0.0 else 0.0
+        # a fit that continues the fluid to more than 2 d_w/Δx times its largest velocity
+        # relative to the wall (a splash, a corner) is not trusted: the Shepard mirror instead
+        size2 = 0.0
+        for b in range(dim):
+            size2 += value[b] * value[b]
+        if corner or size2 > (2.0 * dn) ** 2 * du2_max:
+            sw = 0.0
+            for b in range(dim):
+                value[b] = 0.0
+            for q in range(indptr[w], indptr[w + 1]):
+                f = indices[q]
+                if not is_fluid[f]:
+                    continue
+                _, _, _, r2 = pair_offset(x, w, f, period)
+                wgt, _ = kernel_f_df(kid, np.sqrt(r2) / h[f], support, dim)
+                if wgt <= 0.0:
+                    continue
+                sw += wgt
+                for b in range(dim):
+                    value[b] -= wgt * (v[f, b] - wall_velocity[t, b])
+            for b in range(dim):
+                value[b] = value[b] / sw if sw > 0.0 else 0.0
         for b in range(dim):
             v_out[t, b] = wall_velocity[t, b] + value[b]
 
@@ -299,11 +343,11 @@ def no_slip_wall_velocity(
     :func:`extrapolate_wall_state`; ``spacing`` (m) the wall particles' ``Δx``.
     """
     n_w, dim = wall_ids.shape[0], x.shape[1]
-    is_wall = np.zeros(x.shape[0], dtype=np.bool_)
-    is_wall[wall_ids] = True
+    wall_index = np.full(x.shape[0], -1, dtype=np.int64)
+    wall_index[wall_ids] = np.arange(n_w)
     v_out = np.empty((n_w, dim))
     depth = np.empty(n_w)
-    _no_slip_velocity(wall_ids, indptr, indices, x, v, h, is_fluid, is_wall, kernel.kernel_id, kernel.support, dim,
+    _no_slip_velocity(wall_ids, indptr, indices, x, v, h, is_fluid, wall_index, kernel.kernel_id, kernel.support, dim,
                       float(spacing), wall_velocity, normals, as_period(period), v_out, depth)
     return v_out, depth
 
@@ -313,15 +357,17 @@ def no_slip_wall_velocity_reference(wall_ids, indptr, indices, x, v, h, is_fluid
     """Numpy version of :func:`no_slip_wall_velocity` (tests)."""
     n_w, dim = len(wall_ids), x.shape[1]
     per = as_period(period)
-    is_wall = np.zeros(x.shape[0], dtype=bool)
-    is_wall[wall_ids] = True
+    wall_index = np.full(x.shape[0], -1, dtype=np.int64)
+    wall_index[wall_ids] = np.arange(n_w)
     v_out, depth = np.zeros((n_w, dim)), np.zeros(n_w)
     for t, w in enumerate(wall_ids):
         n = normals[t]
         nb = indices[indptr[w]:indptr[w + 1]]
-        nb = nb[is_wall[nb] & (nb != w)]
+        nb = nb[(wall_index[nb] >= 0) & (nb != w)]
         d = minimum_image(x[nb] - x[w], per)
         proj = d @ n
+        near = np.einsum("id,id->i", d, d) < (kernel.support * h[w]) ** 2
+        corner = bool(np.any(normals[wall_index[nb[near]]] @ n < CORNER_COSINE))
         ok = (proj > 0) & (np.einsum("id,id->i", d, d) - proj**2 < (0.25 * spacing) ** 2)
         if ok.any():
             k = np.flatnonzero(ok)[np.argmax(proj[ok])]
@@ -349,6 +395,14 @@ def no_slip_wall_velocity_reference(wall_ids, indptr, indices, x, v, h, is_fluid
         else:
             ann = n @ P[:dim, :dim] @ n
             v_out[t] = wall_velocity[t] - (dn * (n @ Q[:dim]) / ann if ann > 0 else 0.0)
+        du2_max = np.max(np.sum((v[fl[keep]] - wall_velocity[t]) ** 2, axis=1)) if keep.any() else 0.0
+        if corner or np.sum((v_out[t] - wall_velocity[t]) ** 2) > (2.0 * dn) ** 2 * du2_max:   # Shepard mirror
+            own = indices[indptr[w]:indptr[w + 1]]
+            own = own[is_fluid[own]]
+            Wo = kernel.shape(np.linalg.norm(minimum_image(x[own] - x[w], per), axis=1) / h[own], dim) \
+                if len(own) else np.zeros(0)
+            sw = Wo.sum()
+            v_out[t] = wall_velocity[t] - (Wo @ (v[own] - wall_velocity[t]) / sw if sw > 0 else 0.0)
     return v_out, depth
 
 
