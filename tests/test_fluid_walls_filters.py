@@ -157,6 +157,21 @@ def test_no_slip_wall_velocity_matches_reference(rng):
     assert reached.any() and (~reached).any()
 
 
+def test_no_slip_falls_back_to_the_shepard_mirror_in_corners(rng):
+    """A wall particle with a wall particle in reach whose normal is turned by more than 25°
+    (the corners of a wall box) gets 2 v_wall − ṽ, as extrapolate_wall_state's no_slip mode."""
+    x, n_f, n, h, walls, table = _tank_cloud(rng)
+    args = _wall_args(rng, x, n_f, n, h, walls, table, g=(0.0, -9.81))
+    v_fit, _ = no_slip_wall_velocity(**_no_slip_args(args))
+    _, _, v_mirror = extrapolate_wall_state(**args, slip="no_slip")
+    xw, nw = x[n_f:], walls.normals
+    d = np.linalg.norm(xw[:, None] - xw[None], axis=2)
+    corner = np.any((d < KERNEL.support * h[n_f:, None]) & (nw @ nw.T < 0.9), axis=1)
+    assert corner.sum() >= 8 and (~corner).sum() > corner.sum()
+    np.testing.assert_allclose(v_fit[corner], v_mirror[corner], rtol=1e-12, atol=1e-12)
+    assert np.abs(v_fit[~corner] - v_mirror[~corner]).max() > 0.1
+
+
 @pytest.mark.parametrize("jitter", [0.0, 0.2])
 def test_no_slip_continues_a_shear_profile_into_every_layer(rng, jitter):
     """Over a floor (three layers at depths ½, 3/2, 5/2 Δx) moving at U, a fluid with

@@ -24,7 +24,10 @@ weight. The wall-particle velocity that enters the velocity approximation is
   ``v_f ≈ v_wall + B(x_f − x_s) + c((x_f − x_s)·n)²`` over the fluid in reach of that column's
   top particle, ``x_s = x_w + d_w n`` the particle's foot on the surface
   (:func:`no_slip_wall_velocity`). A shear profile linear or quadratic across the wall (Couette,
-  Poiseuille) is continued exactly into every layer. (Adami, Hu & Adams 2012's ``2 v_wall − ṽ_w`` with the Shepard mean
+  Poiseuille) is continued exactly into every layer. In a corner (a wall particle in reach facing
+  more than 25° away) and where the fit would continue the fluid beyond ``2 d_w/Δx`` times its
+  largest speed relative to the wall, the Shepard mirror ``2 v_wall − ṽ_w`` below instead (the
+  lock-exchange tank diverged at a corner without it). (Adami, Hu & Adams 2012's ``2 v_wall − ṽ_w`` with the Shepard mean
   ``ṽ_w`` gave all layers about the velocity of the fluid 1.5 Δx from the wall and the deepest
   layer, with no fluid in reach, ``v_wall``: in plane Poiseuille flow, H/Δx = 20, the layers at
   0.5, 1.5, 2.5 Δx got −0.109, −0.102, 0 where the parabola continued has −0.103, −0.323,
