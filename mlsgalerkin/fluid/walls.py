@@ -63,9 +63,9 @@ __all__ = ["SLIP_MODES", "Walls", "extrapolate_wall_state", "extrapolate_wall_st
 
 SLIP_MODES = {"no_slip": 0, "free_slip": 1, "fixed": 2}
 
-#: Largest condition number of the no-slip fit's normal matrix (in units of the spacing) before
-#: it drops the curvature term, then the tangential slopes.
-FIT_CONDITION_LIMIT = 1e8
+#: Smallest ``det P / Π diag P`` (1 for orthogonal basis functions, 0 for dependent ones) of the
+#: no-slip fit's normal matrix ``P`` before it drops the curvature term, then the tangential slopes.
+FIT_DETERMINANT_RATIO = 1e-6
 
 #: A no-slip wall particle with a wall particle in reach whose normal is turned from its own by
 #: more than ``arccos(CORNER_COSINE)`` (25°) is in a corner: no flat-wall fit, the Shepard mirror.
@@ -316,15 +316,39 @@ def _no_slip_velocity(wall_ids, indptr, indices, x, v, h, is_fluid, wall_index, 
 
 @numba.njit(cache=True)
 def _fit_at(P, Q, phi, k, dim, value):
-    """``value = phi[:k] · P[:k, :k]⁻¹ Q[:k]`` if ``P[:k, :k]`` is well conditioned (returns True)."""
-    A = np.ascontiguousarray(P[:k, :k])
-    if np.trace(A) <= 0.0 or np.linalg.cond(A) > FIT_CONDITION_LIMIT:
+    """``value = phi[:k] · P[:k, :k]⁻¹ Q[:k]`` by a Cholesky factorisation, if ``P[:k, :k]`` is
+    positive definite with ``det / Π diag`` at least :data:`FIT_DETERMINANT_RATIO` (returns True)."""
+    C = np.zeros((k, k))
+    ratio = 1.0
+    for i in range(k):
+        for j in range(i + 1):
+            acc = P[i, j]
+            for r in range(j):
+                acc -= C[i, r] * C[j, r]
+            if i == j:
+                if acc <= 0.0 or P[i, i] <= 0.0:
+                    return False
+                ratio *= acc / P[i, i]
+                C[i, i] = np.sqrt(acc)
+            else:
+                C[i, j] = acc / C[j, j]
+    if ratio < FIT_DETERMINANT_RATIO:
         return False
-    G = np.linalg.solve(A, np.ascontiguousarray(Q[:k, :]))
+    y = np.zeros(k)       # P y = phi: forward then backward substitution
+    for i in range(k):
+        acc = phi[i]
+        for r in range(i):
+            acc -= C[i, r] * y[r]
+        y[i] = acc / C[i, i]
+    for i in range(k - 1, -1, -1):
+        acc = y[i]
+        for r in range(i + 1, k):
+            acc -= C[r, i] * y[r]
+        y[i] = acc / C[i, i]
     for b in range(dim):
         acc = 0.0
         for a in range(k):
-            acc += phi[a] * G[a, b]
+            acc += y[a] * Q[a, b]
         value[b] = acc
     return True
 
@@ -392,7 +416,8 @@ def no_slip_wall_velocity_reference(wall_ids, indptr, indices, x, v, h, is_fluid
         at = np.concatenate([-dn * n, [dn * dn]])
         for k in (dim + 1, dim):
             A = P[:k, :k]
-            if np.trace(A) > 0 and np.linalg.cond(A) <= FIT_CONDITION_LIMIT:
+            diag = np.diag(A)
+            if np.all(diag > 0) and np.linalg.det(A) / np.prod(diag) >= FIT_DETERMINANT_RATIO:
                 v_out[t] = wall_velocity[t] + at[:k] @ np.linalg.solve(A, Q[:k])
                 break
         else:
