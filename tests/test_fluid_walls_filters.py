@@ -9,7 +9,13 @@ import pytest
 from mlsgalerkin.approximation.build import evaluate_shape_functions
 from mlsgalerkin.fluid import lattice, wall_box
 from mlsgalerkin.fluid.filters import mls_ratio_filter, mls_ratio_filter_reference
-from mlsgalerkin.fluid.walls import SLIP_MODES, extrapolate_wall_state, extrapolate_wall_state_reference
+from mlsgalerkin.fluid.walls import (
+    SLIP_MODES,
+    extrapolate_wall_state,
+    extrapolate_wall_state_reference,
+    no_slip_wall_velocity,
+    no_slip_wall_velocity_reference,
+)
 from mlsgalerkin.kernels import get_kernel
 from mlsgalerkin.neighbors import find_neighbors
 
@@ -131,6 +137,67 @@ def test_accelerating_wall_extrapolation_is_exact(rng):
     p1, _, _ = extrapolate_wall_state(**args, slip="no_slip")
     p2, _, _ = extrapolate_wall_state_reference(**args, slip="no_slip")
     np.testing.assert_allclose(p1, p2, rtol=1e-12, atol=1e-9)
+
+
+def _no_slip_args(args):
+    return {k: args[k] for k in ("wall_ids", "indptr", "indices", "x", "v", "h", "is_fluid", "kernel",
+                                 "wall_velocity", "normals")} | {"spacing": DX}
+
+
+def test_no_slip_wall_velocity_matches_reference(rng):
+    """The compiled per-particle no-slip fit against the numpy one, in a jittered tank with
+    corners (diagonal normals), random velocities and wall particles out of the fluid's reach."""
+    x, n_f, n, h, walls, table = _tank_cloud(rng)
+    args = _no_slip_args(_wall_args(rng, x, n_f, n, h, walls, table, g=(0.0, -9.81)))
+    v, depth = no_slip_wall_velocity(**args)
+    vr, depthr = no_slip_wall_velocity_reference(**args)
+    np.testing.assert_allclose(depth, depthr, rtol=1e-13)
+    np.testing.assert_allclose(v, vr, rtol=1e-9, atol=1e-9)
+    reached = _reached({**args, "wall_ids": args["wall_ids"]})
+    assert reached.any() and (~reached).any()
+
+
+def test_no_slip_falls_back_to_the_shepard_mirror_in_corners(rng):
+    """A wall particle with a wall particle in reach whose normal is turned by more than 25°
+    (the corners of a wall box) gets 2 v_wall − ṽ, as extrapolate_wall_state's no_slip mode."""
+    x, n_f, n, h, walls, table = _tank_cloud(rng)
+    args = _wall_args(rng, x, n_f, n, h, walls, table, g=(0.0, -9.81))
+    v_fit, _ = no_slip_wall_velocity(**_no_slip_args(args))
+    _, _, v_mirror = extrapolate_wall_state(**args, slip="no_slip")
+    xw, nw = x[n_f:], walls.normals
+    d = np.linalg.norm(xw[:, None] - xw[None], axis=2)
+    corner = np.any((d < KERNEL.support * h[n_f:, None]) & (nw @ nw.T < 0.9), axis=1)
+    assert corner.sum() >= 8 and (~corner).sum() > corner.sum()
+    np.testing.assert_allclose(v_fit[corner], v_mirror[corner], rtol=1e-12, atol=1e-12)
+    assert np.abs(v_fit[~corner] - v_mirror[~corner]).max() > 0.1
+
+
+@pytest.mark.parametrize("jitter", [0.0, 0.2])
+def test_no_slip_continues_a_shear_profile_into_every_layer(rng, jitter):
+    """Over a floor (three layers at depths ½, 3/2, 5/2 Δx) moving at U, a fluid with
+    u = U + a y + b y² (Couette and Poiseuille are of this form) gives each wall particle
+    u(y_w) — the profile continued through the wall velocity — and no normal velocity. The
+    Shepard mirror 2U − ṽ (Adami, Hu & Adams 2012) gave the deepest layer U."""
+    fluid = lattice((0.0, 0.0), (0.3, 0.1), DX)
+    fluid = fluid + rng.uniform(-jitter, jitter, fluid.shape) * DX
+    floor = np.column_stack([np.tile(np.arange(30) * DX + 0.5 * DX, 3), np.repeat(-(np.arange(3) + 0.5) * DX, 30)])
+    x = np.ascontiguousarray(np.vstack([fluid, floor]))
+    n_f, n = len(fluid), len(x)
+    h = np.full(n, 1.3 * DX)
+    table = find_neighbors(x, x, radius=KERNEL.support * 1.3 * DX * 1.0001)
+    U, a, b = 0.4, 30.0, -120.0
+    v = np.column_stack([U + a * x[:, 1] + b * x[:, 1] ** 2, np.zeros(n)])
+    is_fluid = np.arange(n) < n_f
+    n_w = n - n_f
+    args = {"wall_ids": np.arange(n_f, n, dtype=np.int64), "indptr": table.indptr, "indices": table.indices,
+            "x": x, "v": v, "h": h, "is_fluid": is_fluid, "kernel": KERNEL, "spacing": DX,
+            "wall_velocity": np.tile([U, 0.0], (n_w, 1)), "normals": np.tile([0.0, 1.0], (n_w, 1))}
+    v_w, depth = no_slip_wall_velocity(**args)
+    y_w = floor[:, 1]
+    np.testing.assert_allclose(depth, -y_w, rtol=1e-12)
+    inner = np.abs(floor[:, 0] - 0.15) < 0.1        # away from the ends of the floor
+    np.testing.assert_allclose(v_w[inner, 0], (U + a * y_w + b * y_w**2)[inner], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(v_w[:, 1], 0.0, atol=1e-9)
 
 
 # ------------------------------------------------------------------------------- filters

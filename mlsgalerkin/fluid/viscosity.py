@@ -10,6 +10,8 @@ from mlsgalerkin.fluid.bodies import FluidBody
 from mlsgalerkin.fluid.effect import Effect, EffectContext, check_nonnegative
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.fluid.time_step import bulk_viscosity_limit, viscous_limit
+from mlsgalerkin.fluid.viscous_stabilisation import viscous_residual_force
+from mlsgalerkin.kernels import get_kernel
 
 __all__ = ["BulkViscosity", "NewtonianViscosity"]
 
@@ -19,17 +21,29 @@ class NewtonianViscosity(Effect):
 
     Wall integration points take the viscosity of the first phase. Time-step limit:
     ``0.125 h²/ν``, ``ν = μ/ρ0`` (:func:`~mlsgalerkin.fluid.time_step.viscous_limit`).
+
+    With ``stabilised=True`` (the default) the fluid particles also get the pair force of
+    :mod:`~mlsgalerkin.fluid.viscous_stabilisation` on the velocity residual
+    ``v_i − v_j − ½(L_i + L_j) x_ij``: zero for a linear velocity field, it gives the modes the
+    nodal gradients cannot see (a row-to-row alternation) their viscous damping.
+    ``stabilised=False`` is the plain nodal term.
     """
 
     name = "newtonian_viscosity"
-    stages = ("stress",)
+    stages = ("stress", "force")
     reads = ("velocity_gradient",)
 
-    def __init__(self, factor: float = 0.125) -> None:
+    def __init__(self, factor: float = 0.125, *, stabilised: bool = True) -> None:
         self.factor = factor
+        self.stabilised = bool(stabilised)
 
     def __repr__(self) -> str:
-        return "NewtonianViscosity()"
+        return "NewtonianViscosity()" if self.stabilised else "NewtonianViscosity(stabilised=False)"
+
+    def setup(self, state: FluidState, ctx: EffectContext) -> None:
+        self._kernel = get_kernel(ctx.approximation.kernel)
+        self._active = np.zeros(state.n, dtype=bool)
+        self._active[state.fluid] = True
 
     def check(self, ctx: EffectContext) -> list[str]:
         if not any(ph.viscosity > 0 for b in ctx.bodies_of(FluidBody) for ph in b.phases):
@@ -45,6 +59,14 @@ class NewtonianViscosity(Effect):
         for a in range(d):
             D[:, a, a] -= (2.0 / 3.0) * tr
         s.stress += s.mu[:, None, None] * D
+
+    def force(self, s: FluidState) -> None:
+        if not self.stabilised:
+            return
+        nb = s.neighbors
+        f = viscous_residual_force(s.x, s.v, s.L, s.mu, s.M / s.rho, s.h, nb.indptr, nb.indices, self._kernel,
+                                   self._active, s.period)
+        s.force[s.fluid] += f[s.fluid]
 
     def time_step_limit(self, s: FluidState) -> float:
         f = s.fluid
