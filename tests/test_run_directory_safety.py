@@ -24,10 +24,17 @@ from mlsgalerkin.simulation import Simulation
 TINY = ["run", "hydrostatic", "--dx", "0.05", "--t-end", "0.02", "--no-progress", "--no-gif"]
 
 
+def _default_hangup() -> None:
+    # a run started under nohup (SIGHUP ignored) rightly goes on when the terminal closes; these
+    # runs stand for one started from a terminal, whatever the test runner was started under
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+
+
 def _cli(args: list[str]) -> subprocess.Popen:
     env = dict(os.environ, NUMBA_NUM_THREADS="1", PYTHONUNBUFFERED="1")
     return subprocess.Popen([sys.executable, "-m", "mlsgalerkin", *args], env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            preexec_fn=_default_hangup)
 
 
 def _one_line_error(err: str) -> str:
