@@ -16,7 +16,7 @@ Measured (``analyse``): at the end, the fluid particles' x velocity averaged ove
 (``Δx`` thick) against the series at the row's mean height; the largest deviation and the RMS
 deviation over the rows in units of ``U`` (acceptance: largest below 1 %); and, as for the
 Poiseuille flow, the deviation's smooth part (three-row filter ¼, ½, ¼) and the amplitude of the
-row-to-row alternation. Measured with the defaults (as for the Poiseuille flow: linear MLS
+row-to-row alternation (``mlsgalerkin.analysis.channel``). Measured with the defaults (as for the Poiseuille flow: linear MLS
 basis, ``h = 1.3 Δx``, ``α = 0``, ``δ = 0.1``, local shifting, ``c0 = 10 U``), to ``t = 5 s``:
 largest deviation 0.01 % of ``U`` at ``H/Δx = 20`` and 40 (5.9 % and 2.8 % before the per-particle
 no-slip wall velocity and the stabilised viscous term; ``docs/theory/galerkin_fluid.md`` §13).
@@ -31,13 +31,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.fluid import FluidBody, Periodic, Phase, WallBody, water
+from mlsgalerkin.analysis.channel import channel_profile_errors, row_means
 from mlsgalerkin.approximation.settings import Approximation
+from mlsgalerkin.deprecation import moved_names
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "SMOKE", "series_velocity", "row_profile"]
 
 SMOKE = {"dx": 0.125, "t_end": 0.05}
+
+#: the profile filter moved to the analysis package with the rest of the profile analysis
+__getattr__ = moved_names(__name__, {"three_row_filter": "mlsgalerkin.analysis.channel"})
 
 #: Largest deviation of the row-averaged profile from the series solution, in units of ``U``.
 PROFILE_TOLERANCE = 0.01
@@ -81,18 +86,7 @@ def series_velocity(y: np.ndarray, t: float, p: Parameters, terms: int = 400) ->
 
 def row_profile(x: np.ndarray, v: np.ndarray, p: Parameters) -> tuple[np.ndarray, np.ndarray]:
     """Mean height (m) and mean x velocity (m/s) of the fluid particles in each row ``Δx`` thick."""
-    rows = int(round(p.height / p.dx))
-    k = np.clip((x[:, 1] / p.dx).astype(int), 0, rows - 1)
-    count = np.bincount(k, minlength=rows)
-    keep = count > 0
-    y = np.bincount(k, x[:, 1], minlength=rows)[keep] / count[keep]
-    u = np.bincount(k, v[:, 0], minlength=rows)[keep] / count[keep]
-    return y, u
-
-
-def three_row_filter(u: np.ndarray) -> np.ndarray:
-    """``¼ u[k−1] + ½ u[k] + ¼ u[k+1]`` over the inner rows (removes a row-to-row alternation)."""
-    return 0.25 * u[:-2] + 0.5 * u[1:-1] + 0.25 * u[2:]
+    return row_means(x[:, 1], v[:, 0], p.height, p.dx)
 
 
 def make_scene(p: Parameters = Parameters()) -> Scene:
@@ -131,32 +125,19 @@ def analyse(result, p: Parameters) -> dict:
     s = result.state.fluid
     n = s.n_fluid
     y, u = row_profile(s.x[:n], s.v[:n], p)
-    exact = series_velocity(y, s.t, p)
-    dev = (u - exact) / p.wall_speed
-    centre = int(np.argmin(np.abs(y - 0.5 * p.height)))
-    smooth = (three_row_filter(u) - three_row_filter(exact)) / p.wall_speed
-    sawtooth = dev[1:-1] - three_row_filter(dev)
+    errors = channel_profile_errors(y, u, series_velocity(y, s.t, p), p.wall_speed, p.height)
     ts = result.timeseries
     out = {
         "reynolds_number": p.reynolds,
         "viscosity_m2_s": viscosity(p),
         "time_s": float(s.t),
         "steady_fraction": float(series_velocity(np.array([0.5 * p.height]), s.t, p)[0] / (0.5 * p.wall_speed)),
-        "profile_error_max": float(np.max(np.abs(dev))),
-        "profile_error_rms": float(np.sqrt(np.mean(dev**2))),
-        "profile_error_max_smooth": float(np.max(np.abs(smooth))),
-        "row_alternation_amplitude": float(np.max(np.abs(sawtooth))),
-        "centre_speed_m_s": float(u[centre]),
-        "centre_speed_exact_m_s": float(exact[centre]),
+        **errors.results(),
         "profile_error_max_over_run": float(np.max(np.asarray(ts["profile_error"], dtype=float))),
-        "profile_within_tolerance": bool(np.max(np.abs(dev)) <= PROFILE_TOLERANCE),
-        "rows": int(y.size),
+        "profile_within_tolerance": errors.max <= PROFILE_TOLERANCE,
+        "rows": errors.rows,
     }
-    out["headline"] = (f"velocity profile within {100 * out['profile_error_max']:.2f} % of U of the start-up series "
-                       f"at t = {s.t:.3g} s (RMS {100 * out['profile_error_rms']:.2f} %; the flow at "
-                       f"{100 * out['steady_fraction']:.0f} % of steady); smooth part within "
-                       f"{100 * out['profile_error_max_smooth']:.2f} %, row-to-row alternation "
-                       f"{100 * out['row_alternation_amplitude']:.2f} %; Re = {p.reynolds:g}")
+    out["headline"] = errors.headline("U", s.t, out["steady_fraction"], p.reynolds)
     return out
 
 

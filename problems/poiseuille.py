@@ -17,7 +17,7 @@ Measured (``analyse``): at the end, the fluid particles' x velocity averaged ove
 deviation over the rows in units of ``u_max`` (acceptance: largest below 1 %), and the centre-row
 speed against the series. The deviation is split into its smooth part (both profiles filtered
 over three rows with weights ¼, ½, ¼, which removes a row-to-row alternation) and the amplitude
-of the alternation itself. Measured with the defaults (linear MLS basis, ``h = 1.3 Δx``,
+of the alternation itself (``mlsgalerkin.analysis.channel``). Measured with the defaults (linear MLS basis, ``h = 1.3 Δx``,
 ``α = 0``, ``δ = 0.1``, local shifting, ``c0 = 10 u_max``, no-slip wall particles continuing the
 fluid velocity per particle, the stabilised Newtonian viscosity), to ``t = 5 s``: largest
 deviation 0.04 % and 0.02 % of ``u_max`` at ``H/Δx = 20`` and 40 (row alternation 0.01 %). Before
@@ -34,13 +34,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.fluid import FluidBody, Periodic, Phase, WallBody, water
+from mlsgalerkin.analysis.channel import channel_profile_errors, row_means
 from mlsgalerkin.approximation.settings import Approximation
+from mlsgalerkin.deprecation import moved_names
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "SMOKE", "series_velocity", "row_profile"]
 
 SMOKE = {"dx": 0.125, "t_end": 0.05}
+
+#: the profile filter moved to the analysis package with the rest of the profile analysis
+__getattr__ = moved_names(__name__, {"three_row_filter": "mlsgalerkin.analysis.channel"})
 
 #: Largest deviation of the row-averaged profile from the series solution, in units of ``u_max``.
 PROFILE_TOLERANCE = 0.01
@@ -89,18 +94,7 @@ def series_velocity(y: np.ndarray, t: float, p: Parameters, terms: int = 200) ->
 
 def row_profile(x: np.ndarray, v: np.ndarray, p: Parameters) -> tuple[np.ndarray, np.ndarray]:
     """Mean height (m) and mean x velocity (m/s) of the fluid particles in each row ``Δx`` thick."""
-    rows = int(round(p.height / p.dx))
-    k = np.clip((x[:, 1] / p.dx).astype(int), 0, rows - 1)
-    count = np.bincount(k, minlength=rows)
-    keep = count > 0
-    y = np.bincount(k, x[:, 1], minlength=rows)[keep] / count[keep]
-    u = np.bincount(k, v[:, 0], minlength=rows)[keep] / count[keep]
-    return y, u
-
-
-def three_row_filter(u: np.ndarray) -> np.ndarray:
-    """``¼ u[k−1] + ½ u[k] + ¼ u[k+1]`` over the inner rows (removes a row-to-row alternation)."""
-    return 0.25 * u[:-2] + 0.5 * u[1:-1] + 0.25 * u[2:]
+    return row_means(x[:, 1], v[:, 0], p.height, p.dx)
 
 
 def make_scene(p: Parameters = Parameters()) -> Scene:
@@ -139,11 +133,7 @@ def analyse(result, p: Parameters) -> dict:
     s = result.state.fluid
     n = s.n_fluid
     y, u = row_profile(s.x[:n], s.v[:n], p)
-    exact = series_velocity(y, s.t, p)
-    dev = (u - exact) / p.u_max
-    centre = int(np.argmin(np.abs(y - 0.5 * p.height)))
-    smooth = (three_row_filter(u) - three_row_filter(exact)) / p.u_max
-    sawtooth = dev[1:-1] - three_row_filter(dev)
+    errors = channel_profile_errors(y, u, series_velocity(y, s.t, p), p.u_max, p.height)
     ts = result.timeseries
     out = {
         "reynolds_number": p.reynolds,
@@ -151,21 +141,12 @@ def analyse(result, p: Parameters) -> dict:
         "body_force_m_s2": body_force(p),
         "time_s": float(s.t),
         "steady_fraction": float(series_velocity(np.array([0.5 * p.height]), s.t, p)[0] / p.u_max),
-        "profile_error_max": float(np.max(np.abs(dev))),
-        "profile_error_rms": float(np.sqrt(np.mean(dev**2))),
-        "profile_error_max_smooth": float(np.max(np.abs(smooth))),
-        "row_alternation_amplitude": float(np.max(np.abs(sawtooth))),
-        "centre_speed_m_s": float(u[centre]),
-        "centre_speed_exact_m_s": float(exact[centre]),
+        **errors.results(),
         "profile_error_max_over_run": float(np.max(np.asarray(ts["profile_error"], dtype=float))),
-        "profile_within_tolerance": bool(np.max(np.abs(dev)) <= PROFILE_TOLERANCE),
-        "rows": int(y.size),
+        "profile_within_tolerance": errors.max <= PROFILE_TOLERANCE,
+        "rows": errors.rows,
     }
-    out["headline"] = (f"velocity profile within {100 * out['profile_error_max']:.2f} % of u_max of the start-up series "
-                       f"at t = {s.t:.3g} s (RMS {100 * out['profile_error_rms']:.2f} %; the flow at "
-                       f"{100 * out['steady_fraction']:.0f} % of steady); smooth part within "
-                       f"{100 * out['profile_error_max_smooth']:.2f} %, row-to-row alternation "
-                       f"{100 * out['row_alternation_amplitude']:.2f} %; Re = {p.reynolds:g}")
+    out["headline"] = errors.headline("u_max", s.t, out["steady_fraction"], p.reynolds)
     return out
 
 

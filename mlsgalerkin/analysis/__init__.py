@@ -1,7 +1,10 @@
 """Verification tools: error norms against closed-form solutions and convergence rates; signal
 analysis of time series (:mod:`~mlsgalerkin.analysis.signals`); results a run did not measure
-(:mod:`~mlsgalerkin.analysis.measured`)."""
+(:mod:`~mlsgalerkin.analysis.measured`); a channel flow's row-averaged velocity profile against an
+exact one, split into a smooth part and a row-to-row alternation
+(:mod:`~mlsgalerkin.analysis.channel`)."""
 
+from mlsgalerkin.analysis.channel import ChannelProfileErrors, channel_profile_errors, row_means, three_row_filter
 from mlsgalerkin.analysis.convergence import (
     ROUNDOFF,
     ObservedOrder,
@@ -30,6 +33,10 @@ from mlsgalerkin.analysis.signals import (
 )
 
 __all__ = [
+    "ChannelProfileErrors",
+    "channel_profile_errors",
+    "row_means",
+    "three_row_filter",
     "ROUNDOFF",
     "ObservedOrder",
     "PowerLawFit",
