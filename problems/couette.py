@@ -30,10 +30,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mlsgalerkin.fluid import FluidBody, Periodic, Phase, WallBody, water
 from mlsgalerkin.analysis.channel import channel_profile_errors, row_means
 from mlsgalerkin.approximation.settings import Approximation
 from mlsgalerkin.deprecation import moved_names
+from mlsgalerkin.fluid import FluidBody, Periodic, Phase, WallBody, water
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
 
