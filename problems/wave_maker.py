@@ -41,6 +41,7 @@ import numpy as np
 
 from mlsgalerkin.analysis.measured import not_measured
 from mlsgalerkin.fluid import (
+    SHIFTING_MODES,
     FluidBody,
     Phase,
     WallBody,
@@ -48,6 +49,7 @@ from mlsgalerkin.fluid import (
     lattice,
     water,
 )
+from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.motion import Oscillation
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
@@ -68,6 +70,11 @@ class Parameters:
     t_end: float = 7.0              #: end time (s)
     ramp_periods: float = 2.0       #: paddle periods over which the paddle is switched on (–)
     alpha: float = 0.1              #: Monaghan artificial viscosity α; 0.02 let a lattice mode grow (–)
+    delta: float = 0.0              #: density diffusion δ (δ-SPH); 0 drops it (–)
+    shifting: str = "off"           #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
+    density_filter: int = 20        #: Shepard density filter every this many steps; 0 drops it (–)
+    negative_pressure: str = "allow"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
+    linear_consistency: bool = False  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     c0_factor: float = 10.0         #: sound speed / sqrt(g d) (–)
     h_factor: float = 1.3           #: smoothing length / particle spacing, h/dx (–)
     g: float = 9.81                 #: gravitational acceleration (m/s²)
@@ -144,8 +151,9 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
         return float(paddle.motion.displacement(state.t)[0])
 
     u_max = 0.5 * p.stroke * 2 * math.pi / p.period / math.tanh(wave_number(p.period, d, p.g) * d)
-    scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), alpha=p.alpha, delta=0.0, shifting="off", density_filter=20,
-                   negative_pressure="allow", spacing=p.dx, h_factor=p.h_factor)
+    scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
+                   density_filter=p.density_filter, negative_pressure=p.negative_pressure,
+                   linear_consistency=p.linear_consistency, spacing=p.dx, h_factor=p.h_factor)
     return Scene(
         [water_body, tank, paddle], [scheme], t_end=p.t_end, name="wave_maker",
         output=Output(every=p.frame_every, probe_every=p.probe_every, gif=p.gif, png=p.gif, color_by="pressure"),
@@ -218,7 +226,11 @@ def check(p: Parameters) -> list[str]:
     """Problems with the parameters (see ``mlsgalerkin.problem``)."""
     out = require_positive(p, "depth", "period", "tank_length", "dx", "t_end", "c0_factor", "h_factor", "g",
                            "probe_every", "frame_every")
-    out += require_nonnegative(p, "stroke", "ramp_periods", "alpha")
+    out += require_nonnegative(p, "stroke", "ramp_periods", "alpha", "delta", "density_filter")
+    out += require(p.shifting in SHIFTING_MODES,
+                   f"shifting = {p.shifting!r}: choose one of {', '.join(SHIFTING_MODES)}")
+    out += require(p.negative_pressure in NEGATIVE_PRESSURE_MODES,
+                   f"negative_pressure = {p.negative_pressure!r}: choose one of {', '.join(NEGATIVE_PRESSURE_MODES)}")
     if not out:
         out += require(p.stroke < p.depth, f"the stroke ({p.stroke:g} m) must be smaller than the depth ({p.depth:g} m)")
         out += require(0 < p.probe_x < p.tank_length,
