@@ -15,10 +15,12 @@ a laboratory tank's, with the water viscosity 1e-3 Pa s: measured at ``D = 0.04`
 rows, free-slip walls let the head run 13–15 % fast (Froude number 0.45–0.46, near
 Benjamin's energy-conserving 0.5), no-slip walls 3–7 % slow (measured at commit d983bcb; the
 3 × 3 matrix of ``verification/results/fluid_core/gravity.md``). The no-slip wall particles
-continue the fluid velocity to their own depth and the Newtonian viscosity is stabilised
-(``docs/theory/galerkin_fluid.md`` §6, §13): the default case (``D = 0.06`` m, ``Δρ/ρ0 = 0.5``,
-``Δx = 3`` mm) runs +2.9 % (−0.2 % with the former Shepard-mirror walls and plain viscous term),
-at ``Δx = 6`` mm −14.4 % (−12.8 %). The head speed at 20 rows
+continue the fluid's tangential velocity to their own depth, with the normal component
+mirrored, and the Newtonian viscosity is stabilised (``docs/theory/galerkin_fluid.md`` §6, §13):
+the default case (``D = 0.06`` m, ``Δρ/ρ0 = 0.5``, ``Δx = 3`` mm) runs +6.0 %, at ``Δx = 6`` mm
+−8.9 %; with the normal component continued too it ran −0.1 % and −14.4 %, with the top row's
+pressure spread (median) 4113 and 2907 Pa instead of 532 and 364 Pa
+(``verification/results/quiet_state/lid_clumping.md``). The head speed at 20 rows
 depends on α: at ``D = 0.12`` m, ``Δρ/ρ0 = 0.5`` it runs +10.7, +0.8 and −10.9 % at
 α = 0, 0.01 and 0.02, so the numerical viscosity, not the resolution, sets most of the error.
 The particles start at the compressible hydrostatic densities

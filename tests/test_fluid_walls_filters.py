@@ -247,3 +247,16 @@ def test_mls_filter_keeps_a_two_phase_jump_sharp(rng):
     out = rho0.copy()
     mls_ratio_filter(table, out, rho0, n_f)
     np.testing.assert_array_equal(out, rho0)
+
+
+def test_no_slip_wall_keeps_the_fit_tangential_and_the_mirror_normal():
+    """The no-slip wall velocity: tangential part from the fit, normal part from the mirror."""
+    from mlsgalerkin.fluid.walls import with_normal_component_of
+
+    n = np.array([[0.0, -1.0], [1.0, 0.0], [np.sqrt(0.5), np.sqrt(0.5)]])
+    v_fit = np.array([[0.3, 0.2], [0.1, -0.4], [1.0, 0.0]])
+    v_mirror = np.array([[-0.5, -0.1], [0.7, 0.9], [0.0, 0.0]])
+    v = with_normal_component_of(v_fit, v_mirror, n)
+    np.testing.assert_allclose(np.sum(v * n, axis=1), np.sum(v_mirror * n, axis=1), atol=1e-15)
+    t = n[:, ::-1] * np.array([1.0, -1.0])
+    np.testing.assert_allclose(np.sum(v * t, axis=1), np.sum(v_fit * t, axis=1), atol=1e-15)
