@@ -383,14 +383,16 @@ class Simulation:
                        parameters=dict(sc.parameters))
         series = next(m for m in monitors if isinstance(m, TimeSeries))
         self._monitors = monitors
-        for m in monitors:
-            m.start(st, info)
-            if m.name in saved_monitors:
-                m.load_state_dict(saved_monitors[m.name])
-        wall0 = time.perf_counter()
-        steps0 = st.step
         status, diagnosis, error = "running", None, None
+        # the stop signals are caught before any monitor writes a file: one that arrives while the
+        # monitors start stops the run after its first step, with its files and a checkpoint
         with _stop_on_signals() as stop:
+            for m in monitors:
+                m.start(st, info)
+                if m.name in saved_monitors:
+                    m.load_state_dict(saved_monitors[m.name])
+            wall0 = time.perf_counter()
+            steps0 = st.step
             try:
                 while st.t < sc.t_end * (1 - 1e-12) and (max_steps is None or st.step - steps0 < max_steps):
                     dt = min(self.time_step(), sc.t_end - st.t)
