@@ -149,3 +149,35 @@ def test_still_water_stays_still_at_low_dissipation():
     # tenth of a second; 0.03 % at 1 s), 1.4 % and growing without it (4.8 % at 2 s); the goal is 1 %
     assert still_water_speed(True) < 0.005
     assert still_water_speed(False) > 0.01
+
+
+def test_a_node_keeps_direct_integration_where_the_pressure_is_not_linear():
+    # water at rest: every interior node is corrected; a pressure spike at one particle (an
+    # impact in miniature) takes the correction off exactly the nodes whose support holds it
+    from mlsgalerkin.fluid.linear_consistency import (
+        linear_consistency_force,
+        linear_consistency_force_reference,
+    )
+    from mlsgalerkin.kernels import get_kernel
+    c0 = 10 * math.sqrt(2 * G * 0.2)
+    fl = FluidBody.block("water", (0.0, 0.0), (0.4, 0.2), 0.02, [Phase("water", RHO)])
+    fl.density[:] = hydrostatic_density(np.full(fl.n, RHO), 0.2 - fl.positions[:, 1], G, c0)
+    walls = wall_box((0.0, 0.0), (0.4, 0.3), 0.02, layers=3, reference_density=RHO)
+    sim = Simulation(Scene([fl, walls], [water(c0, spacing=0.02, negative_pressure="allow", linear_consistency=True)],
+                           t_end=1.0))
+    sim.run(max_steps=1, progress=False)
+    s = sim.state.fluid
+    _, ok_rest, _ = linear_consistency_force(s)
+    interior = s.table.kernel_sum[: s.n_fluid] >= 0.75
+    assert ok_rest[interior].all()
+    spike = int(np.argmin(np.linalg.norm(s.x[: s.n_fluid] - [0.2, 0.1], axis=1)))
+    s.p = s.p.copy()
+    s.p[spike] += 5 * RHO * G * 0.2
+    _, ok, _ = linear_consistency_force(s)
+    _, ok_ref, _ = linear_consistency_force_reference(s, get_kernel("cubic_spline"))
+    assert np.array_equal(ok, ok_ref)
+    ip = s.table.indptr
+    holds_spike = np.array([spike in s.table.indices[ip[i]:ip[i + 1]] for i in range(s.n_fluid)])
+    assert holds_spike.sum() > 10
+    assert not ok[holds_spike].any()
+    assert np.array_equal(ok[~holds_spike], ok_rest[~holds_spike])
