@@ -36,6 +36,22 @@ def first_acceleration(extra, *, length=0.4, depth=0.2, dx=0.02, gravity=True, o
     return s.a[: fl.n].copy(), s.x[: fl.n].copy()
 
 
+def tank_with_the_correction(steps: int, jitter: float = 0.0):
+    """The fluid state after ``steps`` steps of a 0.4 m × 0.2 m tank of water at hydrostatic
+    rest (positions jittered by ``jitter`` Δx), with the linear consistency listed."""
+    c0 = 10 * math.sqrt(2 * G * 0.2)
+    fl = FluidBody.block("water", (0.0, 0.0), (0.4, 0.2), 0.02, [Phase("water", RHO)])
+    if jitter:
+        rng = np.random.default_rng(3)
+        fl.positions[:] += rng.uniform(-jitter, jitter, fl.positions.shape) * 0.02
+    fl.density[:] = hydrostatic_density(np.full(fl.n, RHO), 0.2 - fl.positions[:, 1], G, c0)
+    walls = wall_box((0.0, 0.0), (0.4, 0.3), 0.02, layers=3, reference_density=RHO)
+    sim = Simulation(Scene([fl, walls], [water(c0, spacing=0.02, negative_pressure="allow", linear_consistency=True)],
+                           t_end=1.0))
+    sim.run(max_steps=steps, progress=False)
+    return sim.state.fluid
+
+
 def test_water_at_rest_is_in_balance_at_the_surface_and_walls():
     a_dni, _ = first_acceleration([])
     a_lc, _ = first_acceleration([LinearConsistentPressure()])
@@ -74,16 +90,7 @@ def test_compiled_kernels_agree_with_the_numpy_reference():
         surface_faces_reference,
     )
     from mlsgalerkin.kernels import get_kernel
-    c0 = 10 * math.sqrt(2 * G * 0.2)
-    fl = FluidBody.block("water", (0.0, 0.0), (0.4, 0.2), 0.02, [Phase("water", RHO)])
-    rng = np.random.default_rng(3)
-    fl.positions[:] += rng.uniform(-0.2, 0.2, fl.positions.shape) * 0.02   # disordered, with a free surface
-    fl.density[:] = hydrostatic_density(np.full(fl.n, RHO), 0.2 - fl.positions[:, 1], G, c0)
-    walls = wall_box((0.0, 0.0), (0.4, 0.3), 0.02, layers=3, reference_density=RHO)
-    sim = Simulation(Scene([fl, walls], [water(c0, spacing=0.02, negative_pressure="allow", linear_consistency=True)],
-                           t_end=1.0))
-    sim.run(max_steps=3, progress=False)
-    s = sim.state.fluid
+    s = tank_with_the_correction(steps=3, jitter=0.2)   # disordered, with a free surface
     k = get_kernel("cubic_spline")
     # the table again, its Shepard sums with the volumes the reference reads (the solver's are of
     # the kinematics stage, before the walls' densities of the evaluation are set)
@@ -159,14 +166,7 @@ def test_a_node_keeps_direct_integration_where_the_pressure_is_not_linear():
         linear_consistency_force_reference,
     )
     from mlsgalerkin.kernels import get_kernel
-    c0 = 10 * math.sqrt(2 * G * 0.2)
-    fl = FluidBody.block("water", (0.0, 0.0), (0.4, 0.2), 0.02, [Phase("water", RHO)])
-    fl.density[:] = hydrostatic_density(np.full(fl.n, RHO), 0.2 - fl.positions[:, 1], G, c0)
-    walls = wall_box((0.0, 0.0), (0.4, 0.3), 0.02, layers=3, reference_density=RHO)
-    sim = Simulation(Scene([fl, walls], [water(c0, spacing=0.02, negative_pressure="allow", linear_consistency=True)],
-                           t_end=1.0))
-    sim.run(max_steps=1, progress=False)
-    s = sim.state.fluid
+    s = tank_with_the_correction(steps=1)
     _, ok_rest, _ = linear_consistency_force(s)
     interior = s.table.kernel_sum[: s.n_fluid] >= 0.75
     assert ok_rest[interior].all()
