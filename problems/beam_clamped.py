@@ -41,6 +41,7 @@ from mlsgalerkin.fluid import (
     water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
+from mlsgalerkin.fluid.presets import RECOMMENDED
 from mlsgalerkin.interactions import StructureCoupling
 from mlsgalerkin.problem import (
     numerical_dissipation,
@@ -50,7 +51,11 @@ from mlsgalerkin.problem import (
 )
 from mlsgalerkin.scene import Output, Probe, Scene
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial
-from mlsgalerkin.structure.checks import explicit_substep_problems, mesh_size_problems, poisson_problems
+from mlsgalerkin.structure.checks import (
+    explicit_substep_problems,
+    mesh_size_problems,
+    poisson_problems,
+)
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "SMOKE", "euler_bernoulli_period"]
 
@@ -77,10 +82,11 @@ class Parameters:
     dx: float = 0.004             #: particle spacing (m)
     t_end: float = 4.0            #: end time (s)
     rho: float = 1000.0           #: water density (kg/m³)
-    alpha: float = 0.02           #: Monaghan artificial viscosity α (–)
-    delta: float = 0.1            #: density diffusion δ (δ-SPH) (–)
-    shifting: str = "local"       #: particle shifting: local, design or off (choice)
+    alpha: float = RECOMMENDED.alpha  #: Monaghan artificial viscosity α (–)
+    delta: float = RECOMMENDED.delta  #: density diffusion δ (δ-SPH) (–)
+    shifting: str = RECOMMENDED.shifting  #: particle shifting: local, design or off (choice)
     negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
+    linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     c0_factor: float = 10.0       #: sound speed / 2 sqrt(gH) (–)
     g: float = 9.81               #: gravitational acceleration (m/s²)
     probe_every: float = 1.0e-3   #: time between time-series rows (s)
@@ -121,7 +127,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     coupling = StructureCoupling("water", "beam", walls="beam_walls", thickness=0.25 * p.dx,
                                  wall_acceleration=p.wall_acceleration, iterations=p.iterations, tolerance=1e-7)
     scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
-                   negative_pressure=p.negative_pressure, penalty_thickness=0.25 * p.dx, spacing=p.dx)
+                   negative_pressure=p.negative_pressure, penalty_thickness=0.25 * p.dx,
+                   linear_consistency=p.linear_consistency, spacing=p.dx)
 
     def tip_x(state) -> float:
         m = state.body("beam")

@@ -35,7 +35,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.analysis.measured import not_measured
-from mlsgalerkin.analysis.signals import crossing_period, grid_average, half_height_window, threshold_windows
+from mlsgalerkin.analysis.signals import (
+    crossing_period,
+    grid_average,
+    half_height_window,
+    threshold_windows,
+)
 from mlsgalerkin.contact import ContactSurface
 from mlsgalerkin.fluid import (
     SHIFTING_MODES,
@@ -47,6 +52,7 @@ from mlsgalerkin.fluid import (
     water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
+from mlsgalerkin.fluid.presets import RECOMMENDED
 from mlsgalerkin.fluid.sensors import pressure_at, sensor_points
 from mlsgalerkin.interactions import StructureCoupling
 from mlsgalerkin.problem import (
@@ -93,10 +99,11 @@ class Parameters:
     t_end: float = 7.0            #: end time (s)
     wall_acceleration: float = 0.0  #: share of the beam's acceleration the wall pressure sees, 0 to 1 (–)
     rho: float = 1000.0           #: water density (kg/m³)
-    alpha: float = 0.02           #: Monaghan artificial viscosity α (–)
-    delta: float = 0.1            #: density diffusion δ (δ-SPH) (–)
-    shifting: str = "local"       #: particle shifting: local, design or off (choice)
+    alpha: float = RECOMMENDED.alpha  #: Monaghan artificial viscosity α (–)
+    delta: float = RECOMMENDED.delta  #: density diffusion δ (δ-SPH) (–)
+    shifting: str = RECOMMENDED.shifting  #: particle shifting: local, design or off (choice)
     negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
+    linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     c0_factor: float = 10.0       #: sound speed / 2 sqrt(gH) (–)
     g: float = 9.81               #: gravitational acceleration (m/s²)
     probe_every: float = 1.0e-3   #: time between time-series rows (s)
@@ -139,7 +146,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     coupling = StructureCoupling("water", "beam", walls="beam_walls", thickness=0.25 * p.dx,
                                  wall_acceleration=p.wall_acceleration)
     scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
-                   negative_pressure=p.negative_pressure, penalty_thickness=0.25 * p.dx, spacing=p.dx)
+                   negative_pressure=p.negative_pressure, penalty_thickness=0.25 * p.dx,
+                   linear_consistency=p.linear_consistency, spacing=p.dx)
     approximation = scheme.approximation
     hinge = np.array([p.tank_length, 0.0])
     local = sensor_points((p.tank_length, 0.0), SENSOR_HEIGHT - 0.5 * SENSOR_SIZE, SENSOR_HEIGHT + 0.5 * SENSOR_SIZE,

@@ -39,6 +39,7 @@ from mlsgalerkin.fluid import (
     water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
+from mlsgalerkin.fluid.presets import RECOMMENDED
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
 
@@ -56,10 +57,11 @@ class Parameters:
     tank_length_factor: float = 5.5     #: tank length / a (–)
     tank_height_factor: float = 4.0     #: wall height / 2a; the run-up jet reaches about 3 (2a) (–)
     rho: float = 1000.0                 #: water density (kg/m³)
-    alpha: float = 0.02                 #: Monaghan artificial viscosity α (–)
-    delta: float = 0.1                  #: density diffusion δ (δ-SPH); 0 drops it (–)
-    shifting: str = "local"             #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
-    consistent_integration: bool = False #: nodal integration that meets the integration constraint (VCI) (bool)
+    alpha: float = RECOMMENDED.alpha  #: Monaghan artificial viscosity α (–)
+    delta: float = RECOMMENDED.delta  #: density diffusion δ (δ-SPH); 0 drops it (–)
+    shifting: str = RECOMMENDED.shifting  #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
+    consistent_integration: bool = RECOMMENDED.consistent_integration  #: nodal integration that meets the integration constraint (VCI) (bool)
+    linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     penalty_walls: bool = True          #: the tank's inner surface as a penalty-contact backstop (bool)
     penalty_thickness: float = 0.25     #: contact thickness of the penalty surface / dx (–)
@@ -84,7 +86,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                    flow=(math.sqrt(2.0 * p.g * height), a), delta=p.delta, shifting=p.shifting,
                    negative_pressure=p.negative_pressure,
                    penalty_thickness=p.penalty_thickness * p.dx if p.penalty_walls else None,
-                   consistent_integration=p.consistent_integration, spacing=p.dx, h_factor=p.h_factor)
+                   consistent_integration=p.consistent_integration, linear_consistency=p.linear_consistency,
+                   spacing=p.dx, h_factor=p.h_factor)
     n_fluid = water_column.n
 
     def front_x(state) -> float:

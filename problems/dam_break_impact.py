@@ -46,6 +46,7 @@ from mlsgalerkin.fluid import (
     water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
+from mlsgalerkin.fluid.presets import RECOMMENDED
 from mlsgalerkin.fluid.sensors import pressure_at, sensor_points
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import MAX_FRAMES, Output, Probe, Scene
@@ -66,11 +67,11 @@ class Parameters:
     tank_length_factor: float = 3.22 / 0.6       #: tank length / H (–)
     tank_height_factor: float = 3.0      #: wall height / H; the run-up reaches about 2H (–)
     rho: float = 1000.0                  #: water density (kg/m³)
-    alpha: float = 0.02                  #: Monaghan artificial viscosity α (–)
-    delta: float = 0.1                   #: density diffusion δ (δ-SPH); 0 drops it (–)
-    shifting: str = "local"              #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
-    consistent_integration: bool = False #: nodal integration that meets the integration constraint (VCI) (bool)
-    linear_consistency: bool = False  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    alpha: float = RECOMMENDED.alpha  #: Monaghan artificial viscosity α (–)
+    delta: float = RECOMMENDED.delta  #: density diffusion δ (δ-SPH); 0 drops it (–)
+    shifting: str = RECOMMENDED.shifting  #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
+    consistent_integration: bool = RECOMMENDED.consistent_integration  #: nodal integration that meets the integration constraint (VCI) (bool)
+    linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     penalty_walls: bool = True           #: the tank's inner surface as a penalty-contact backstop behind the wall particles (bool)
     penalty_thickness: float = 0.25      #: contact thickness of the penalty surface / dx (–)

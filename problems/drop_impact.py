@@ -43,6 +43,7 @@ from mlsgalerkin.fluid import (
     water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
+from mlsgalerkin.fluid.presets import RECOMMENDED
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
 
@@ -63,11 +64,12 @@ class Parameters:
     dx: float = 0.001              #: particle spacing (m)
     t_end: float = 0.16            #: end time (s)
     c0_factor: float = 10.0        #: sound speed / impact speed (–)
-    alpha: float = 0.05            #: Monaghan artificial viscosity α (–)
-    delta: float = 0.1             #: density diffusion δ (δ-SPH); 0 drops it (–)
-    shifting: str = "local"        #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
-    consistent_integration: bool = False #: nodal integration that meets the integration constraint (VCI) (bool)
-    density_filter: int = 0        #: Shepard density filter every this many steps; 0 drops it (–)
+    alpha: float = RECOMMENDED.alpha  #: Monaghan artificial viscosity α (–)
+    delta: float = RECOMMENDED.delta  #: density diffusion δ (δ-SPH); 0 drops it (–)
+    shifting: str = RECOMMENDED.shifting  #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
+    consistent_integration: bool = RECOMMENDED.consistent_integration  #: nodal integration that meets the integration constraint (VCI) (bool)
+    linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    density_filter: int = RECOMMENDED.density_filter  #: Shepard density filter every this many steps; 0 drops it (–)
     negative_pressure: str = "free_surface"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     h_factor: float = 1.3          #: smoothing length / particle spacing, h/dx (–)
     g: float = 9.81                #: gravitational acceleration (m/s²)
@@ -99,7 +101,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     n = body.n
     scheme = water(c0, u_max=p.speed, gravity=(0.0, -p.g), newtonian=True, alpha=p.alpha, delta=p.delta,
                    shifting=p.shifting, density_filter=p.density_filter, negative_pressure=p.negative_pressure,
-                   consistent_integration=p.consistent_integration, spacing=p.dx, h_factor=p.h_factor)
+                   consistent_integration=p.consistent_integration, linear_consistency=p.linear_consistency,
+                   spacing=p.dx, h_factor=p.h_factor)
 
     def total_energy(state) -> float:
         s = state.fluid

@@ -75,6 +75,7 @@ from mlsgalerkin.fluid import (
     wall_box,
     water,
 )
+from mlsgalerkin.fluid.presets import RECOMMENDED
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
 
@@ -93,12 +94,12 @@ class Parameters:
     dx: float = 0.003              #: particle spacing (m)
     t_end: float = 0.8             #: end time (s)
     c0: float = 0.0                #: sound speed; 0 picks 10 max(2.5 v_h, sqrt(g D)) (m/s)
-    alpha: float = 0.01            #: Monaghan artificial viscosity α (–)
-    delta: float = 0.1             #: density diffusion δ (δ-SPH, same-phase pairs); 0 drops it (–)
-    shifting: str = "local"        #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
-    density_filter: int = 0        #: Shepard density filter every this many steps; 0 drops it (–)
-    consistent_integration: bool = False  #: nodal integration that meets the integration constraint (VCI) (bool)
-    linear_consistency: bool = False  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    alpha: float = RECOMMENDED.alpha  #: Monaghan artificial viscosity α (–)
+    delta: float = RECOMMENDED.delta  #: density diffusion δ (δ-SPH, same-phase pairs); 0 drops it (–)
+    shifting: str = RECOMMENDED.shifting  #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
+    density_filter: int = RECOMMENDED.density_filter  #: Shepard density filter every this many steps; 0 drops it (–)
+    consistent_integration: bool = RECOMMENDED.consistent_integration  #: nodal integration that meets the integration constraint (VCI) (bool)
+    linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     penalty_walls: bool = True     #: the tank's inner surface as a penalty-contact backstop (bool)
     negative_pressure: str = "allow"  #: tension treatment: allow, clamp or cavitate (choice)
     lid_pressure_factor: float = 1.0  #: pressure under the lid at the start / (rho_heavy g D), a closed tank's free level (–)

@@ -23,6 +23,7 @@ from mlsgalerkin.fluid import (
     wall_box,
     water,
 )
+from mlsgalerkin.fluid.presets import RECOMMENDED
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
 
@@ -38,18 +39,18 @@ class Parameters:
     dx: float = 0.01            #: particle spacing (m)
     t_end: float = 2.0          #: end time (s)
     rho: float = 1000.0         #: water density (kg/m³)
-    alpha: float = 0.2          #: Monaghan artificial viscosity α; 0.1 let a lattice shear mode grow at dx = 0.01 after 1.4 s (–)
+    alpha: float = RECOMMENDED.alpha  #: Monaghan artificial viscosity α (–)
     c0_factor: float = 10.0     #: sound speed / sqrt(2 g H) (–)
     h_factor: float = 1.3       #: smoothing length / particle spacing, h/dx (–)
     g: float = 9.81             #: gravitational acceleration (m/s²)
     slip: str = "free_slip"     #: wall condition: free_slip, no_slip or fixed (choice)
     lid: bool = False           #: a rigid lid on the water instead of a free surface (bool)
-    delta: float = 0.0          #: density diffusion δ (δ-SPH); 0 drops it (–)
-    shifting: str = "off"       #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
-    density_filter: int = 20    #: Shepard density filter every this many steps; 0 drops it (–)
-    negative_pressure: str = "allow"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
-    consistent_integration: bool = False  #: the constant-only consistent nodal integration (bool)
-    linear_consistency: bool = False  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    delta: float = RECOMMENDED.delta  #: density diffusion δ (δ-SPH); 0 drops it (–)
+    shifting: str = RECOMMENDED.shifting  #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
+    density_filter: int = RECOMMENDED.density_filter  #: Shepard density filter every this many steps; 0 drops it (–)
+    negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
+    consistent_integration: bool = RECOMMENDED.consistent_integration  #: the constant-only consistent nodal integration (bool)
+    linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     frame_every: float = 0.1    #: time between VTU frames (s)
     gif: bool = False           #: render animation.gif and final.png (bool)
 

@@ -37,11 +37,16 @@ from mlsgalerkin.fluid import (
     lattice,
     water,
 )
+from mlsgalerkin.fluid.presets import RECOMMENDED
 from mlsgalerkin.interactions import StructureCoupling
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
 from mlsgalerkin.structure import ElasticBody, ElasticMaterial
-from mlsgalerkin.structure.checks import explicit_substep_problems, mesh_size_problems, poisson_problems
+from mlsgalerkin.structure.checks import (
+    explicit_substep_problems,
+    mesh_size_problems,
+    poisson_problems,
+)
 
 __all__ = ["Parameters", "make_scene", "analyse", "check", "SMOKE", "plate_theory"]
 
@@ -62,7 +67,7 @@ class Parameters:
     integrator: str = "newmark" #: plate time integrator: newmark or explicit (choice)
     wall_acceleration: float = 1.0  #: share of the plate's acceleration the wall pressure sees, 0 to 1 (–)
     t_end: float = 0.5          #: end time (s)
-    alpha: float = 0.2          #: Monaghan artificial viscosity α, as in the hydrostatic tank (–)
+    alpha: float = RECOMMENDED.alpha  #: Monaghan artificial viscosity α (–)
     c0_factor: float = 10.0     #: sound speed / sqrt(2 g H) (–)
     g: float = 9.81             #: gravitational acceleration (m/s²)
     frame_every: float = 0.05   #: time between VTU frames (s)
@@ -118,8 +123,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
 
     return Scene(
         [water_body, _side_walls(p), riding, plate],
-        [water(c0, gravity=(0.0, -p.g), alpha=p.alpha, delta=0.0, shifting="off", density_filter=20,
-               negative_pressure="allow", spacing=p.dx)],
+        [water(c0, gravity=(0.0, -p.g), alpha=p.alpha, spacing=p.dx)],
         t_end=p.t_end, name="hydrostatic_plate",
         interactions=[coupling],
         output=Output(every=p.frame_every, probe_every=0.001, gif=p.gif, png=p.gif, color_by="pressure"),

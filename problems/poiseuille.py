@@ -37,6 +37,7 @@ from mlsgalerkin.analysis.channel import channel_profile_errors, row_means
 from mlsgalerkin.approximation.settings import Approximation
 from mlsgalerkin.deprecation import moved_names
 from mlsgalerkin.fluid import FluidBody, Periodic, Phase, WallBody, water
+from mlsgalerkin.fluid.presets import RECOMMENDED
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
 
@@ -65,6 +66,7 @@ class Parameters:
     delta: float = 0.1               #: δ-SPH density diffusion coefficient (0: none) (–)
     shifting: str = "local"          #: particle shifting: local, design or off (choice)
     consistent_integration: bool = False  #: consistent nodal integration (bool)
+    linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     h_factor: float = 1.3            #: smoothing length / particle spacing, h/dx (–)
     basis: str = "linear"            #: MLS basis: linear or quadratic (choice)
     frame_every: float = 1.0         #: time between VTU frames (s)
@@ -117,7 +119,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
 
     scheme = water(c0, u_max=p.u_max, gravity=(body_force(p), 0.0), slip="no_slip", alpha=p.alpha,
                    flow=(p.u_max, p.height), newtonian=True, delta=p.delta, shifting=p.shifting,
-                   negative_pressure="allow", consistent_integration=p.consistent_integration, spacing=p.dx,
+                   negative_pressure="allow", consistent_integration=p.consistent_integration,
+                   linear_consistency=p.linear_consistency, spacing=p.dx,
                    approximation=Approximation(h_factor=p.h_factor, basis=p.basis),
                    periodic=Periodic(x=(0.0, p.length)))
     return Scene(

@@ -45,6 +45,7 @@ from mlsgalerkin.fluid import (
     wall_box,
     water,
 )
+from mlsgalerkin.fluid.presets import RECOMMENDED
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
 
@@ -62,14 +63,14 @@ class Parameters:
     dx: float = 0.003              #: particle spacing (m)
     t_end: float = 5.0             #: end time (s)
     c0: float = 0.0                #: sound speed; 0 picks 10 sqrt(g D) (m/s)
-    alpha: float = 0.1             #: Monaghan artificial viscosity α (–)
+    alpha: float = RECOMMENDED.alpha  #: Monaghan artificial viscosity α (–)
     residual_viscosity: bool = False  #: Monaghan on the deviation from the linear velocity field only (bool)
-    delta: float = 0.1             #: density diffusion δ (δ-SPH, same-phase pairs); 0 drops it (–)
-    shifting: str = "local"        #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
-    density_filter: int = 0        #: Shepard density filter every this many steps; 0 drops it (–)
+    delta: float = RECOMMENDED.delta  #: density diffusion δ (δ-SPH, same-phase pairs); 0 drops it (–)
+    shifting: str = RECOMMENDED.shifting  #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
+    density_filter: int = RECOMMENDED.density_filter  #: Shepard density filter every this many steps; 0 drops it (–)
     negative_pressure: str = "allow"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
-    consistent_integration: bool = True  #: nodal integration that meets the integration constraint (VCI) (bool)
-    linear_consistency: bool = False  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    consistent_integration: bool = RECOMMENDED.consistent_integration  #: nodal integration that meets the integration constraint (VCI) (bool)
+    linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     lid: bool = True               #: rigid lid on top; false: a free surface (bool)
     h_factor: float = 1.3          #: smoothing length / particle spacing, h/dx (–)
     g: float = 9.81                #: gravitational acceleration (m/s²)

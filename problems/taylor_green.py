@@ -38,8 +38,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mlsgalerkin.fluid import FluidBody, ParticleShifting, Periodic, Phase, tait_density, water
 from mlsgalerkin.approximation.settings import Approximation
+from mlsgalerkin.fluid import FluidBody, ParticleShifting, Periodic, Phase, tait_density, water
+from mlsgalerkin.fluid.presets import RECOMMENDED
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
 
@@ -65,6 +66,7 @@ class Parameters:
     shifting: str = "local"          #: particle shifting: local, design or off (choice)
     shifting_surface: float = 0.02   #: λ below which shifting treats a particle as at a free surface; the preset's 0.9 (–)
     consistent_integration: bool = False  #: consistent nodal integration (bool)
+    linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     h_factor: float = 1.3            #: smoothing length / particle spacing, h/dx (–)
     basis: str = "linear"            #: MLS basis: linear or quadratic (choice)
     frame_every: float = 0.25        #: time between VTU frames (s)
@@ -117,7 +119,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                                   splash=0.5 * p.shifting_surface)])
     scheme = water(c0, u_max=p.speed, gravity=None, slip=None, alpha=p.alpha, flow=(p.speed, p.side),
                    newtonian=True, delta=p.delta, shifting="off", negative_pressure="allow",
-                   consistent_integration=p.consistent_integration, spacing=p.dx,
+                   consistent_integration=p.consistent_integration,
+                   linear_consistency=p.linear_consistency, spacing=p.dx,
                    approximation=Approximation(h_factor=p.h_factor, basis=p.basis),
                    extra=shifting, periodic=Periodic(x=(0.0, p.side), y=(0.0, p.side)))
     return Scene(

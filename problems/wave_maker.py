@@ -50,6 +50,7 @@ from mlsgalerkin.fluid import (
     water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
+from mlsgalerkin.fluid.presets import RECOMMENDED
 from mlsgalerkin.motion import Oscillation
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
@@ -69,12 +70,12 @@ class Parameters:
     dx: float = 0.01                #: particle spacing (m)
     t_end: float = 7.0              #: end time (s)
     ramp_periods: float = 2.0       #: paddle periods over which the paddle is switched on (–)
-    alpha: float = 0.1              #: Monaghan artificial viscosity α; 0.02 let a lattice mode grow (–)
-    delta: float = 0.0              #: density diffusion δ (δ-SPH); 0 drops it (–)
-    shifting: str = "off"           #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
-    density_filter: int = 20        #: Shepard density filter every this many steps; 0 drops it (–)
-    negative_pressure: str = "allow"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
-    linear_consistency: bool = False  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    alpha: float = RECOMMENDED.alpha  #: Monaghan artificial viscosity α (–)
+    delta: float = RECOMMENDED.delta  #: density diffusion δ (δ-SPH); 0 drops it (–)
+    shifting: str = RECOMMENDED.shifting  #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
+    density_filter: int = RECOMMENDED.density_filter  #: Shepard density filter every this many steps; 0 drops it (–)
+    negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
+    linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     c0_factor: float = 10.0         #: sound speed / sqrt(g d) (–)
     h_factor: float = 1.3           #: smoothing length / particle spacing, h/dx (–)
     g: float = 9.81                 #: gravitational acceleration (m/s²)

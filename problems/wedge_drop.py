@@ -48,6 +48,7 @@ from mlsgalerkin.fluid import (
     water,
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
+from mlsgalerkin.fluid.presets import RECOMMENDED
 from mlsgalerkin.interactions import StructureCoupling
 from mlsgalerkin.problem import (
     numerical_dissipation,
@@ -78,10 +79,11 @@ class Parameters:
     t_end: float = 0.025          #: end time (s)
     wall_acceleration: float = 1.0  #: share of the wedge's acceleration the wall pressure sees, 0 to 1 (–)
     rho: float = 1000.0           #: water density (kg/m³)
-    alpha: float = 0.02           #: Monaghan artificial viscosity α (–)
-    delta: float = 0.1            #: density diffusion δ (δ-SPH) (–)
-    shifting: str = "local"       #: particle shifting: local, design or off (choice)
+    alpha: float = RECOMMENDED.alpha  #: Monaghan artificial viscosity α (–)
+    delta: float = RECOMMENDED.delta  #: density diffusion δ (δ-SPH) (–)
+    shifting: str = RECOMMENDED.shifting  #: particle shifting: local, design or off (choice)
     negative_pressure: str = "free_surface"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
+    linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     c0_factor: float = 10.0       #: sound speed / entry speed (–)
     g: float = 9.81               #: gravitational acceleration (m/s²)
     probe_every: float = 2.5e-4   #: time between time-series rows (s)
@@ -122,7 +124,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     coupling = StructureCoupling("water", "wedge", walls="wedge_walls", thickness=0.25 * p.dx,
                                  wall_acceleration=p.wall_acceleration)
     scheme = water(c0, u_max=p.velocity, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
-                   negative_pressure=p.negative_pressure, penalty_thickness=0.25 * p.dx, spacing=p.dx)
+                   negative_pressure=p.negative_pressure, penalty_thickness=0.25 * p.dx,
+                   linear_consistency=p.linear_consistency, spacing=p.dx)
 
     def velocity(state) -> float:
         return -float(state.body("wedge").V[1])

@@ -51,11 +51,13 @@ def cases(quick: bool) -> list[tuple[str, str, dict]]:
         ("gravity_current", "rho_heavy=2000", {"rho_heavy": 2000.0, "dx": 0.003, "t_end": 0.7, "gif": False}),
     ]
     out += [("gravity_current", "free surface, dx=0.002", {"lid": False, "dx": 0.002, "gif": False})]
-    out += [("drop_impact", "dx=0.001", {"dx": 0.001, "gif": True})]
-    # the piston wave maker (moving wall) at 20, 30 and 40 particle rows per depth, and the
-    # cost of doubling the artificial viscosity at 20 rows
+    out += [("drop_impact", "dx=0.002", {"dx": 0.002, "gif": False}), ("drop_impact", "dx=0.001", {"dx": 0.001, "gif": True})]
+    # the piston wave maker (moving wall) at 20, 30 and 40 particle rows per depth, and at 20
+    # rows the former set (alpha = 0.1, Shepard filter, no diffusion, no shifting, direct nodal)
     out += [("wave_maker", f"{n} rows", {"dx": 0.2 / n}) for n in (20, 30, 40)]
-    out += [("wave_maker", "20 rows, alpha=0.2", {"dx": 0.01, "alpha": 0.2})]
+    out += [("wave_maker", "20 rows, former set", {"dx": 0.01, "alpha": 0.1, "delta": 0.0, "shifting": "off",
+                                                    "density_filter": 20, "negative_pressure": "allow",
+                                                    "linear_consistency": False})]
     return out
 
 
@@ -112,6 +114,7 @@ def run_all(out: Path, runs: Path, quick: bool, only: list[str] | None = None) -
             "fluid_particles": fl["particles"]["fluid"], "steps": s["steps"], "wall_time_s": wall,
             "particle_steps_per_s": s["particle_steps_per_s"], "error_measure": name, "error": err,
             "fallback_points": fl["diagnostics"]["shape_function_fallback_points"],
+            "volume_error": ((fl.get("run_checks") or {}).get("volume") or {}).get("max_abs_error"),
             "results": res, "run_dir": str(run_dir),
         }
         rows.append(row)
@@ -198,7 +201,9 @@ def plots(rows: list[dict], out: Path) -> None:
             ts = read_timeseries(Path(r["run_dir"]) / "timeseries.csv")
             p = r["results"]
             lock = float(ts["head_x"][0])
-            ax.plot(ts["time"], (lock - ts["head_x"]), label=f"{r['case']}: {p['head_speed_m_s']:.3f} m/s")
+            speed = p.get("head_speed_m_s")
+            ax.plot(ts["time"], (lock - ts["head_x"]),
+                    label=f"{r['case']}: " + ("not measured" if speed is None else f"{speed:.3f} m/s"))
         ax.set_xlabel("t (s)")
         ax.set_ylabel("head travel from the lock (m)")
         ax.legend(fontsize=7)
@@ -247,11 +252,14 @@ def summary_md(rows: list[dict], quick: bool) -> str:
               f"- mlsgalerkin {prov['mlsgalerkin_version']}, commit `{prov['git_commit']}`, {prov['date_utc']}",
               f"- machine: {prov['machine']['platform']}, {prov['machine']['cpu_count']} cores; numba {prov['numba']}", ""]
     lines += ["## All runs (error and wall time)", "",
-              "| problem | case | particles | steps | wall time (s) | particle-steps/s | error | measure |",
-              "|---|---|---:|---:|---:|---:|---:|---|"]
+              "| problem | case | particles | steps | wall time (s) | particle-steps/s | error | measure | "
+              "largest volume error |",
+              "|---|---|---:|---:|---:|---:|---:|---|---:|"]
     for r in rows:
+        vol = r.get("volume_error")
         lines.append(f"| {r['problem']} | {r['case']} | {r['particles']} | {r['steps']} | {r['wall_time_s']:.1f} | "
-                     f"{r['particle_steps_per_s']:.3g} | {r['error']:.4g} | {r['error_measure']} |")
+                     f"{r['particle_steps_per_s']:.3g} | {r['error']:.4g} | {r['error_measure']} | "
+                     f"{'–' if vol is None else f'{100 * vol:.2f} %'} |")
     lines.append("")
     hs = [r for r in rows if r["problem"] == "hydrostatic"]
     if hs:
@@ -325,13 +333,13 @@ def summary_md(rows: list[dict], quick: bool) -> str:
                   "Wave height H at a gauge two depths from the paddle (harmonic fit over the window of steady waves "
                   "before the far wall's reflection returns) against linear wave-maker theory, "
                   "H/S = 2(cosh 2kd − 1)/(sinh 2kd + 2kd) with ω² = g k tanh kd (Dean & Dalrymple 1991). "
-                  "Depth 0.2 m, period 1 s (kd = 1.04), stroke 2 cm. Tolerance: 10 % (a linear theory for a weakly "
-                  "non-linear wave, H/d = 0.1, whose second harmonic is 7–8 % of the first, and a gauge reading "
-                  "smoothed over ±4 Δx). The Monaghan artificial viscosity acts as ν ≈ α h c0 / 8 (α = 0.1 unless "
-                  "stated); a progressive wave loses amplitude at the rate 2νk² (Lamb 1932), about "
+                  "Depth 0.2 m, period 1 s (kd = 1.04), stroke 2 cm. Goal: within 5 % at the default 20 rows (a linear "
+                  "theory for a weakly non-linear wave, H/d = 0.1, whose second harmonic is 7–8 % of the first, and a "
+                  "gauge reading smoothed over ±4 Δx). The settings are the one recommended set unless stated. The "
+                  "Monaghan artificial viscosity acts as ν ≈ α h c0 / 8; a progressive wave loses amplitude at the rate 2νk² (Lamb 1932), about "
                   "1 − exp(−2νk² x_gauge / c_g) between paddle and gauge (column *viscous decay*); the wave "
                   "Reynolds number is ω/(νk²) (water: about 10⁵).", "",
-                  "| case | rows per depth | H (mm) | theory (mm) | rel. error | viscous decay | 2nd/1st harmonic | ν_num (m²/s) | Re = ω/(νk²) | wall time (s) | within 10 % |",
+                  "| case | rows per depth | H (mm) | theory (mm) | rel. error | viscous decay | 2nd/1st harmonic | ν_num (m²/s) | Re = ω/(νk²) | wall time (s) | within 5 % |",
                   "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
         for r in wm:
             p = r["results"]
@@ -344,7 +352,7 @@ def summary_md(rows: list[dict], quick: bool) -> str:
                          f"{-100 * p['viscous_decay_to_gauge']:.1f} % | "
                          f"{p['second_harmonic_over_first']:.3f} | {p['numerical_viscosity_m2_s']:.2e} | "
                          f"{p['wave_reynolds_number']:.0f} | "
-                         f"{r['wall_time_s']:.1f} | {'yes' if abs(p['relative_error']) <= 0.10 else 'NO'} |")
+                         f"{r['wall_time_s']:.1f} | {'yes' if abs(p['relative_error']) <= 0.05 else 'NO'} |")
         lines += ["", "![wave maker](wave_maker_eta.png)", ""]
     lines += ["## Figures", "", "![work-precision](work_precision.png)", "", "![dam break](dam_break_front.png)", "",
               "![gravity current](gravity_current_head.png)", ""]
@@ -369,8 +377,8 @@ def main(argv: list[str] | None = None) -> int:
     else:
         rows = run_all(out, runs, args.quick, args.only)
     header = ["problem", "case", "dx_m", "particles", "fluid_particles", "steps", "wall_time_s",
-              "particle_steps_per_s", "error", "error_measure", "fallback_points"]
-    atomic_write(out / "fluid_validation.csv", csv_text(header, [[format_cell(r[h]) for h in header] for r in rows]))
+              "particle_steps_per_s", "error", "error_measure", "fallback_points", "volume_error"]
+    atomic_write(out / "fluid_validation.csv", csv_text(header, [[format_cell(r.get(h)) for h in header] for r in rows]))
     atomic_write(out / "results.json", json.dumps(rows, indent=1, default=str) + "\n")
     plots(rows, out)
     wave_maker_plot(rows, out)

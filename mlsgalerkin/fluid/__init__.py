@@ -78,7 +78,7 @@ from mlsgalerkin.fluid.pair_viscosity import (
     numerical_viscosity,
 )
 from mlsgalerkin.fluid.penalty_walls import PenaltyWalls
-from mlsgalerkin.fluid.presets import water
+from mlsgalerkin.fluid.presets import RECOMMENDED, StabilisationSet, water
 from mlsgalerkin.fluid.run_checks import ParticleClumpingWarning, ShapeFunctionFallbackWarning, VolumeErrorWarning
 from mlsgalerkin.fluid.scheme import FluidContext, FluidScheme
 from mlsgalerkin.fluid.shifting import ParticleShifting
@@ -151,6 +151,8 @@ __all__ = [
     "viscous_limit",
     "wall_box",
     "water",
+    "RECOMMENDED",
+    "StabilisationSet",
 ]
 
 

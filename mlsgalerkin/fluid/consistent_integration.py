@@ -169,6 +169,7 @@ class ConsistentIntegration(Effect):
     """
 
     name = "consistent_integration"
+    stabilising = True
     stages = ("force",)
     reads = ("shape_functions", "volume")
 

@@ -174,6 +174,7 @@ class DensityDiffusion(Effect):
     """
 
     name = "density_diffusion"
+    stabilising = True
     stages = ("continuity",)
     reads = ("density", "neighbors", "sound_speed")
     provides = (GRADIENT_FIELD,)

@@ -113,6 +113,9 @@ class Effect:
     reads: tuple[str, ...] = ()
     provides: tuple[str, ...] = ()
     role: str = "other"  # "pressure" for the pressure model (exactly one per scene)
+    #: a numerical stabilisation (artificial viscosity, density diffusion or filtering, shifting,
+    #: consistent integration) rather than physics: a scheme that lists none gets the recommended set
+    stabilising: bool = False
 
     def check(self, ctx: EffectContext) -> list[str]:
         """Problems with this effect in the fluid's scheme and scene ``ctx`` (empty if none);

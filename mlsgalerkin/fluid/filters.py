@@ -97,6 +97,7 @@ class DensityFilter(Effect):
     """
 
     name = "density_filter"
+    stabilising = True
     stages = ("after_step",)
     reads = ("density", "shape_functions")
 

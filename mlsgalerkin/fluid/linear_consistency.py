@@ -293,6 +293,7 @@ class LinearConsistentPressure(Effect):
     outer face carries the boundary term. Experimental: not part of any default yet."""
 
     name = "linear_consistent_pressure"
+    stabilising = True
     stages = ("force",)
     reads = ("shape_functions", "volume", "kernel_sum")
 

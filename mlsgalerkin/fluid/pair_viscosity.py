@@ -344,6 +344,7 @@ class MonaghanViscosity(Effect):
     """
 
     name = "monaghan_viscosity"
+    stabilising = True
     stages = ("force",)
     reads = ("velocity", "density", "sound_speed", "neighbors")
 

@@ -5,17 +5,22 @@ Reynolds number of the artificial viscosity) and what it changes; everything els
 place, so every problem runs the same numerics unless it says otherwise:
 
 >>> scheme = water(c0=20.0, spacing=0.01)
->>> [type(e).__name__ for e in scheme.effects]
-['TaitPressure', 'Gravity', 'Walls', 'MonaghanViscosity', 'DensityDiffusion', 'ParticleShifting']
+>>> [type(e).__name__ for e in scheme.effects]  # doctest: +NORMALIZE_WHITESPACE
+['TaitPressure', 'Gravity', 'Walls', 'MonaghanViscosity', 'DensityDiffusion', 'ParticleShifting',
+ 'LinearConsistentPressure']
 >>> scheme.spacing, scheme.approximation.h_factor
 (0.01, 1.3)
 
-The defaults are the settings the impact problems (``dam_break_impact``, ``wedge_drop``, the
-structure problems) were validated with: Monaghan's pair viscosity ``α = 0.02``, density diffusion
-``δ = 0.1`` (Antuono et al. 2010), particle shifting at each particle's own speed (Skillen et al.
-2013), tension released by cavitation (the density floored at the rest density), a cubic-spline
-MLS approximation with ``h = 1.3 Δx`` (``docs/theory/stabilisation.md`` has what each does and
-costs).
+The defaults are :data:`RECOMMENDED`, the one numerical set every shipped fluid problem runs:
+Monaghan's pair viscosity ``α = 0.02``, density diffusion ``δ = 0.1`` (Antuono et al. 2010),
+particle shifting at each particle's own speed (Skillen et al. 2013), no density filter, the
+pressure's local linear fit integrated exactly with the free-surface boundary term
+(:class:`~mlsgalerkin.fluid.linear_consistency.LinearConsistentPressure`), and a cubic-spline
+MLS approximation with ``h = 1.3 Δx``. Tension released by cavitation (the density floored at the
+rest density) is the default model of a liquid against air; a problem whose physics differs
+(a closed tank, a surface that separates) says so (``docs/theory/stabilisation.md`` has what
+each setting does and costs, ``verification/results/quiet_state/investigation.md`` how the set
+was chosen).
 """
 
 from __future__ import annotations
@@ -28,19 +33,23 @@ from mlsgalerkin.fluid.eos import TaitPressure
 from mlsgalerkin.fluid.gravity import Gravity
 from mlsgalerkin.fluid.linear_consistency import LinearConsistentPressure
 from mlsgalerkin.fluid.pair_viscosity import MonaghanViscosity
+from mlsgalerkin.fluid.recommended import RECOMMENDED, StabilisationSet
 from mlsgalerkin.fluid.scheme import FluidScheme
 from mlsgalerkin.fluid.stabilisation import stabilisation
 from mlsgalerkin.fluid.viscosity import NewtonianViscosity
 from mlsgalerkin.fluid.walls import Walls
 
-__all__ = ["water"]
+__all__ = ["RECOMMENDED", "StabilisationSet", "water"]
 
 
 def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | None = (0.0, -9.81),
-          slip: str | None = "free_slip", alpha: float = 0.02, flow: tuple[float, float] | None = None,
-          residual_viscosity: bool = False, newtonian: bool = False, delta: float = 0.1, shifting: str = "local",
-          density_filter: int = 0, negative_pressure: str = "cavitate", penalty_thickness: float | None = None,
-          consistent_integration: bool = False, linear_consistency: bool = False, spacing: float | None = None,
+          slip: str | None = "free_slip", alpha: float = RECOMMENDED.alpha,
+          flow: tuple[float, float] | None = None, residual_viscosity: bool = False, newtonian: bool = False,
+          delta: float = RECOMMENDED.delta, shifting: str = RECOMMENDED.shifting,
+          density_filter: int = RECOMMENDED.density_filter, negative_pressure: str = "cavitate",
+          penalty_thickness: float | None = None,
+          consistent_integration: bool = RECOMMENDED.consistent_integration,
+          linear_consistency: bool = RECOMMENDED.linear_consistency, spacing: float | None = None,
           h_factor: float = 1.3,
           approximation: Approximation | None = None, extra: Sequence[Effect] = (), **options: Any) -> FluidScheme:
     """The recommended :class:`~mlsgalerkin.fluid.scheme.FluidScheme` for water (module docstring).
@@ -52,8 +61,9 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     :func:`~mlsgalerkin.fluid.stabilisation.stabilisation` of ``delta``, ``shifting``,
     ``density_filter``, ``negative_pressure``, ``penalty_thickness`` (m; the tank's penalty surface
     as a backstop, reaching one ``spacing``) and ``consistent_integration``;
-    ``LinearConsistentPressure()`` if ``linear_consistency`` (experimental: the pressure's local
-    linear fit integrated exactly, with the free-surface boundary term); then ``extra``.
+    ``LinearConsistentPressure()`` if ``linear_consistency`` (the pressure's local linear fit
+    integrated exactly, with the free-surface boundary term); then ``extra``. The stabilisation
+    defaults are :data:`RECOMMENDED`.
 
     Parameters
     ----------
@@ -71,7 +81,8 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     h_factor : float
         ``h/Δx`` of the default approximation (ignored when ``approximation`` is given).
     **options
-        ``integrator``, ``mass``, ``safety``, ``dt_max`` of the scheme.
+        ``integrator``, ``mass``, ``safety``, ``dt_max``, ``periodic`` of the scheme
+        (``stabilisation`` is ``"as_listed"``: the effects above are exactly what is asked for).
     """
     effects: list[Effect] = [TaitPressure(c0, u_max=u_max, negative_pressure=negative_pressure)]
     if gravity is not None:
@@ -89,4 +100,5 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
         effects.append(LinearConsistentPressure())
     effects += list(extra)
     approximation = approximation if approximation is not None else Approximation(h_factor=h_factor)
+    options.setdefault("stabilisation", "as_listed")  # the list above is explicit: nothing is added to it
     return FluidScheme(effects, approximation=approximation, spacing=spacing, **options)

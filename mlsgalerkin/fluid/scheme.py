@@ -11,11 +11,21 @@ A scene lists the fluid's settings once, as a scheme beside the other solvers' s
 ['safety factor must be in (0, 1.5], got 3.0']
 
 :func:`~mlsgalerkin.fluid.presets.water` returns the recommended scheme for water with a free
-surface, so a problem lists only what it changes.
+surface, so a problem lists only what it changes. A scheme that lists no stabilising effect at all
+gets the recommended set (:mod:`~mlsgalerkin.fluid.recommended`) added, and says so; one that lists
+part of it is warned; ``stabilisation="as_listed"`` runs exactly the list:
+
+>>> [type(e).__name__ for e in FluidScheme([TaitPressure(20.0), Gravity((0.0, -9.81))]).effects]
+... # doctest: +NORMALIZE_WHITESPACE
+['TaitPressure', 'Gravity', 'MonaghanViscosity', 'DensityDiffusion', 'ParticleShifting',
+ 'LinearConsistentPressure']
+>>> len(FluidScheme([TaitPressure(20.0)], stabilisation="as_listed").effects)
+1
 """
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, ClassVar, Sequence
 
@@ -24,15 +34,25 @@ from mlsgalerkin.dynamics import SceneView, Scheme
 from mlsgalerkin.fluid.effect import Effect
 from mlsgalerkin.fluid.integrators import make_integrator
 from mlsgalerkin.fluid.mass import MASS_OPTIONS
+from mlsgalerkin.fluid.recommended import (
+    STABILISATION_MODES,
+    is_stabilising,
+    missing_from_recommended,
+    recommended_stabilisation,
+)
 from mlsgalerkin.io.files import to_jsonable
 from mlsgalerkin.periodic import Periodic
 
-__all__ = ["FluidContext", "FluidScheme", "SPACING_TOLERANCE"]
+__all__ = ["FluidContext", "FluidScheme", "PartialStabilisationWarning", "SPACING_TOLERANCE"]
 
 #: Largest relative difference between a wall body's particle spacing and the fluid's: wall
 #: particles are nodes of the fluid's approximation and each integrates a ``spacing^d`` volume,
 #: so walls on another lattice leave the fluid's Galerkin sums wrong near the wall.
 SPACING_TOLERANCE = 1e-6
+
+
+class PartialStabilisationWarning(UserWarning):
+    """A scheme lists some stabilising effects but not the whole recommended set."""
 
 
 @dataclass
@@ -74,9 +94,27 @@ class FluidScheme(Scheme):
     dt_max: float | None = None
     spacing: float | None = None
     periodic: Periodic | None = None
+    stabilisation: str = "auto"
 
     def __post_init__(self) -> None:
-        self.effects = list(self.effects)
+        listed = list(self.effects)
+        #: what ``stabilisation="auto"`` appended to the listed effects (empty if nothing)
+        self.added_stabilisation: list[Effect] = []
+        #: the recommended stabilising effects a list with some stabilisation leaves out
+        self.missing_stabilisation: list[str] = []
+        if self.stabilisation == "auto":
+            if not any(is_stabilising(e) for e in listed):
+                self.added_stabilisation = recommended_stabilisation()
+            else:
+                self.missing_stabilisation = missing_from_recommended(listed)
+                if self.missing_stabilisation:
+                    warnings.warn(
+                        "the fluid scheme lists its own stabilisation without "
+                        f"{', '.join(self.missing_stabilisation)} of the recommended set: impacts and long quiet "
+                        "runs are known to go unstable or drift without them (docs/theory/stabilisation.md). "
+                        "Build the scheme with water(...) or list them; FluidScheme(..., stabilisation='as_listed') "
+                        "runs exactly the list without this warning", PartialStabilisationWarning, stacklevel=3)
+        self.effects = listed + self.added_stabilisation
 
     def problems(self) -> list[str]:
         """Problems with the options alone (the effects are checked with the bodies, by the solver)."""
@@ -93,6 +131,8 @@ class FluidScheme(Scheme):
             out.append(f"mass must be 'lumped', 'particle' or 'consistent', got {self.mass!r}")
         if self.spacing is not None and not (isinstance(self.spacing, (int, float)) and self.spacing > 0):
             out.append(f"spacing must be positive (the particle spacing, m), got {self.spacing!r}")
+        if self.stabilisation not in STABILISATION_MODES:
+            out.append(f"stabilisation must be one of {', '.join(STABILISATION_MODES)}, got {self.stabilisation!r}")
         if self.periodic is not None and not isinstance(self.periodic, Periodic):
             out.append(f"periodic must be a Periodic (e.g. Periodic(x=(0.0, 1.0))) or None, got {self.periodic!r}")
         if isinstance(self.approximation, Approximation):
@@ -120,6 +160,14 @@ class FluidScheme(Scheme):
         if self.periodic is not None:  # only then: the identity of a run without periodic axes is unchanged
             out["periodic"] = self.periodic.identity()
         return out  # the spacing is checked against the bodies, whose initial state the identity hashes
+
+    def stabilisation_report(self) -> dict[str, Any]:
+        """For ``summary.json``: the mode, the stabilising effects that ran, what the scheme
+        added to the list, and what of the recommended set a listed stabilisation left out."""
+        return {"mode": self.stabilisation,
+                "effects": [repr(e) for e in self.effects if is_stabilising(e)],
+                "added": [repr(e) for e in self.added_stabilisation],
+                "missing_from_recommended": list(self.missing_stabilisation)}
 
 
 @dataclass(frozen=True)

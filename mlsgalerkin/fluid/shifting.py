@@ -258,6 +258,7 @@ class ParticleShifting(Effect):
     """
 
     name = "particle_shifting"
+    stabilising = True
     stages = ("drift",)
     reads = ("positions", "velocity", "density", "neighbors", "velocity_gradient")
 

@@ -763,6 +763,7 @@ class FluidSolver(Solver):
             "approximation": to_jsonable(self.approximation.__dict__),
             "integrator": self.integrator.name, "mass": self.mass_option,
             "effects": [repr(e) for e in self.effects],
+            "stabilisation": self.scheme.stabilisation_report(),
             "moving_walls": [f"{w.name}: {w.motion!r}" for w in self.walls if w.motion is not None],
             "time_per_stage_s": {k: round(v, 6) for k, v in sorted(self.timer.seconds.items(), key=lambda kv: -kv[1])},
             "time_per_stage_fraction": {k: round(v / total, 4) for k, v in self.timer.seconds.items()},

@@ -1,0 +1,82 @@
+r"""The one recommended numerical set of the fluid, :data:`RECOMMENDED`, and the effects it
+stands for.
+
+Every shipped fluid problem runs this set (its parameters default to it), :func:`water` builds it,
+and a :class:`~mlsgalerkin.fluid.scheme.FluidScheme` that lists no stabilising effect at all
+gets it added (``stabilisation="auto"``, the default; ``summary.json`` says what was added):
+
+>>> RECOMMENDED.alpha, RECOMMENDED.delta, RECOMMENDED.shifting, RECOMMENDED.linear_consistency
+(0.02, 0.1, 'local', True)
+>>> [type(e).__name__ for e in recommended_stabilisation()]
+['MonaghanViscosity', 'DensityDiffusion', 'ParticleShifting', 'LinearConsistentPressure']
+
+An effect is *stabilising* when its class says ``stabilising = True``: numerical terms that keep
+the particle method stable and accurate (artificial viscosity, density diffusion or filtering,
+shifting, consistent integration), as opposed to the physics the scene calls for.
+``verification/results/quiet_state/investigation.md`` has the measurements the set rests on.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+from mlsgalerkin.fluid.density_diffusion import DensityDiffusion
+from mlsgalerkin.fluid.effect import Effect
+from mlsgalerkin.fluid.linear_consistency import LinearConsistentPressure
+from mlsgalerkin.fluid.pair_viscosity import MonaghanViscosity
+from mlsgalerkin.fluid.shifting import ParticleShifting
+
+__all__ = ["RECOMMENDED", "STABILISATION_MODES", "StabilisationSet", "is_stabilising", "missing_from_recommended",
+           "recommended_stabilisation"]
+
+#: ``FluidScheme(stabilisation=...)``: ``"auto"`` adds the recommended set when no stabilising
+#: effect is listed and warns when only part of it is; ``"as_listed"`` runs exactly the list.
+STABILISATION_MODES = ("auto", "as_listed")
+
+
+@dataclass(frozen=True)
+class StabilisationSet:
+    """The numerical stabilisation of the fluid, as :func:`~mlsgalerkin.fluid.presets.water` takes it.
+
+    ``alpha`` Monaghan's pair viscosity (–; its kinematic viscosity ``ν = α h c0 / 8`` is
+    reported with the Reynolds number it implies), ``delta`` the δ-SPH density diffusion (–),
+    ``shifting`` one of ``"local"``, ``"design"``, ``"off"``, ``density_filter`` a Shepard
+    filter every this many steps (0: none), ``consistent_integration`` the constant-only VCI,
+    ``linear_consistency`` the pressure's linear fit integrated exactly.
+    """
+
+    alpha: float = 0.02
+    delta: float = 0.1
+    shifting: str = "local"
+    density_filter: int = 0
+    consistent_integration: bool = False
+    linear_consistency: bool = True
+
+    def as_dict(self) -> dict[str, Any]:
+        """The set as keyword arguments of :func:`~mlsgalerkin.fluid.presets.water`."""
+        return dict(self.__dict__)
+
+
+#: The one recommended set: every shipped fluid problem's defaults (quiet water, impacts, waves,
+#: stratified flows).
+RECOMMENDED = StabilisationSet()
+
+
+def recommended_stabilisation() -> list[Effect]:
+    """The stabilising effects of :data:`RECOMMENDED`, in the order :func:`water` lists them:
+    ``MonaghanViscosity(α)``, ``DensityDiffusion(δ)``, ``ParticleShifting("local")``,
+    ``LinearConsistentPressure()``."""
+    return [MonaghanViscosity(RECOMMENDED.alpha), DensityDiffusion(RECOMMENDED.delta),
+            ParticleShifting(RECOMMENDED.shifting), LinearConsistentPressure()]
+
+
+def is_stabilising(effect: object) -> bool:
+    """Whether ``effect`` is a numerical stabilisation (its class says ``stabilising = True``)."""
+    return bool(getattr(effect, "stabilising", False))
+
+
+def missing_from_recommended(effects: Sequence[object]) -> list[str]:
+    """Class names of the recommended stabilising effects that ``effects`` does not list."""
+    listed = {type(e) for e in effects}
+    return [type(e).__name__ for e in recommended_stabilisation() if type(e) not in listed]
