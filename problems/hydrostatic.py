@@ -17,6 +17,7 @@ import numpy as np
 
 from mlsgalerkin.analysis.measured import not_measured
 from mlsgalerkin.fluid import (
+    ClosedVolume,
     FluidBody,
     Phase,
     hydrostatic_density,
@@ -45,6 +46,7 @@ class Parameters:
     g: float = 9.81             #: gravitational acceleration (m/s²)
     slip: str = "free_slip"     #: wall condition: free_slip, no_slip or fixed (choice)
     lid: bool = False           #: a rigid lid on the water instead of a free surface (bool)
+    closed_volume: bool = True     #: with the lid: hold the closed tank's volume in the continuity equation (ClosedVolume) (bool)
     delta: float = RECOMMENDED.delta  #: density diffusion δ (δ-SPH); 0 drops it (–)
     shifting: str = RECOMMENDED.shifting  #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
     density_filter: int = RECOMMENDED.density_filter  #: Shepard density filter every this many steps; 0 drops it (–)
@@ -84,7 +86,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
         [water(c0, gravity=(0.0, -p.g), slip=p.slip, alpha=p.alpha, delta=p.delta, shifting=p.shifting,
                density_filter=p.density_filter, negative_pressure=p.negative_pressure,
                consistent_integration=p.consistent_integration, linear_consistency=p.linear_consistency,
-               spacing=p.dx, h_factor=p.h_factor)],
+               spacing=p.dx, h_factor=p.h_factor,
+               extra=[ClosedVolume()] if p.lid and p.closed_volume else [])],
         t_end=p.t_end, name="hydrostatic",
         output=Output(every=p.frame_every, probe_every=0.005, gif=p.gif, png=p.gif, color_by="pressure"),
         probes=[Probe("pressure_rms_error", pressure_rms_error), Probe("max_speed_ratio", max_speed_ratio),

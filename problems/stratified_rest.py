@@ -38,6 +38,7 @@ import numpy as np
 from mlsgalerkin.analysis.measured import not_measured
 from mlsgalerkin.fluid import (
     SHIFTING_MODES,
+    ClosedVolume,
     FluidBody,
     Phase,
     hydrostatic_pressure,
@@ -72,6 +73,7 @@ class Parameters:
     consistent_integration: bool = RECOMMENDED.consistent_integration  #: nodal integration that meets the integration constraint (VCI) (bool)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     lid: bool = True               #: rigid lid on top; false: a free surface (bool)
+    closed_volume: bool = True     #: with the lid: hold the closed tank's volume in the continuity equation (ClosedVolume) (bool)
     h_factor: float = 1.3          #: smoothing length / particle spacing, h/dx (–)
     g: float = 9.81                #: gravitational acceleration (m/s²)
     settle: float = 1.0            #: the final interval over which analyse averages (s)
@@ -113,7 +115,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                    residual_viscosity=p.residual_viscosity, delta=p.delta, shifting=p.shifting,
                    density_filter=p.density_filter, negative_pressure=p.negative_pressure,
                    consistent_integration=p.consistent_integration, linear_consistency=p.linear_consistency,
-                   spacing=p.dx, h_factor=p.h_factor)
+                   spacing=p.dx, h_factor=p.h_factor,
+                   extra=[ClosedVolume()] if p.lid and p.closed_volume else [])
     n = body.n
     scale = (p.rho_heavy - p.rho_light) * p.g * p.depth
 

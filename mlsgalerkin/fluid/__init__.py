@@ -30,6 +30,8 @@ module                                 contents
 :mod:`~mlsgalerkin.fluid.linear_consistency`  :class:`LinearConsistentPressure`: the pressure's
                                        linear part integrated exactly, with the free-surface term
 :mod:`~mlsgalerkin.fluid.sponge`       :class:`SpongeZone`: a damping zone that absorbs waves
+:mod:`~mlsgalerkin.fluid.closed_volume`  :class:`ClosedVolume`: the volume balance of a closed tank
+:mod:`~mlsgalerkin.fluid.recommended`  :data:`RECOMMENDED`: the one recommended stabilisation set
 :mod:`~mlsgalerkin.fluid.stabilisation`  :func:`stabilisation`: the stabilising effects from a few parameters
 :mod:`~mlsgalerkin.fluid.corrected_gradient`  the renormalised gradient of the density ratio
 :mod:`~mlsgalerkin.fluid.free_surface` :class:`FreeSurfaceDetection` and its kernels
@@ -78,6 +80,7 @@ from mlsgalerkin.fluid.pair_viscosity import (
     numerical_viscosity,
 )
 from mlsgalerkin.fluid.penalty_walls import PenaltyWalls
+from mlsgalerkin.fluid.closed_volume import ClosedVolume
 from mlsgalerkin.fluid.presets import RECOMMENDED, StabilisationSet, water
 from mlsgalerkin.fluid.run_checks import ParticleClumpingWarning, ShapeFunctionFallbackWarning, VolumeErrorWarning
 from mlsgalerkin.fluid.scheme import FluidContext, FluidScheme
@@ -99,6 +102,7 @@ from mlsgalerkin.periodic import Periodic
 
 __all__ = [
     "BulkViscosity",
+    "ClosedVolume",
     "ConsistentIntegration",
     "LinearConsistentPressure",
     "SpongeZone",

@@ -8,7 +8,9 @@ stages of a force evaluation, called in this order by the
 stage         what happens
 ============  ===========================================================================
 kinematics    wall-particle velocities (before the velocity gradient is formed)
-(solver)      velocity gradient ``L_k = Σ_j v_j ⊗ ∇N_j(x_k)``, continuity ``ρ̇ = −ρ tr L``
+(solver)      velocity gradient ``L_k = Σ_j v_j ⊗ ∇N_j(x_k)`` and its trace ``tr L``
+divergence    corrections of ``tr L`` (the volume balance of a closed tank); then
+              (solver) continuity ``ρ̇ = −ρ tr L``
 continuity    added terms of the continuity rate ``ρ̇`` (density diffusion)
 pressure      the pressure model: ``p``, sound speed ``c`` (exactly one effect)
 boundary      wall-particle pressure and density
@@ -53,7 +55,7 @@ from mlsgalerkin.fluid.state import FluidState
 
 __all__ = ["SOLVER_QUANTITIES", "STAGES", "Effect", "EffectContext", "check_nonnegative", "check_positive"]
 
-STAGES = ("kinematics", "continuity", "pressure", "boundary", "stress", "force", "after_step", "drift")
+STAGES = ("kinematics", "divergence", "continuity", "pressure", "boundary", "stress", "force", "after_step", "drift")
 SOLVER_QUANTITIES = frozenset({
     "positions", "velocity", "density", "mass", "volume", "velocity_gradient",
     "shape_functions", "neighbors", "continuity_rate", "kernel_sum",
@@ -127,6 +129,7 @@ class Effect:
         ``provides`` into the state."""
 
     def kinematics(self, s: FluidState) -> None: ...
+    def divergence(self, s: FluidState, div: np.ndarray) -> None: ...
     def continuity(self, s: FluidState) -> None: ...
     def pressure(self, s: FluidState) -> None: ...
     def boundary(self, s: FluidState) -> None: ...

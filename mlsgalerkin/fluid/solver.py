@@ -495,6 +495,10 @@ class FluidSolver(Solver):
             e.kinematics(s)
             t0 = self.timer.add(e.name, t0)
         s.L, self._div = velocity_gradient_divergence(s.table, s.v, s.L, self._div)
+        t0 = self.timer.add("velocity_gradient", t0)
+        for e in self._stage_effects["divergence"]:
+            e.divergence(s, self._div)
+            t0 = self.timer.add(e.name, t0)
         f = s.fluid
         np.multiply(s.rho[f], self._div[f], out=s.drho[f])
         np.negative(s.drho[f], out=s.drho[f])
