@@ -20,32 +20,33 @@ mirrored, and the Newtonian viscosity is stabilised (``docs/theory/galerkin_flui
 the default case (``D = 0.06`` m, ``Δρ/ρ0 = 0.5``, ``Δx = 3`` mm) runs +6.0 %, at ``Δx = 6`` mm
 −8.9 %; with the normal component continued too it ran −0.1 % and −14.4 %, with the top row's
 pressure spread (median) 4113 and 2907 Pa instead of 532 and 364 Pa
-(``verification/results/quiet_state/lid_clumping.md``). The head speed at 20 rows
-depends on α: at ``D = 0.12`` m, ``Δρ/ρ0 = 0.5`` it runs +10.7, +0.8 and −10.9 % at
-α = 0, 0.01 and 0.02, so the numerical viscosity, not the resolution, sets most of the error.
-The particles start at the compressible hydrostatic densities
-(``hydrostatic_density(..., compressible=True)``). Stabilisation: Monaghan
-``α = 0.01`` (a numerical viscosity ``α h c0/8``; the Reynolds number ``v_h D/ν`` it implies
-is in ``summary.json``: 350 at ``D = 0.12`` m, ``Δρ/ρ0 = 0.5``), δ-SPH density diffusion within each phase, particle shifting and
-the tank's penalty surface; ``docs/theory/stabilisation.md`` has the measurements.
+(``verification/results/quiet_state/lid_clumping.md``). The particles start at the compressible
+hydrostatic densities (``hydrostatic_density(..., compressible=True)``). The simulated tank is
+``length`` and ``depth`` rounded to whole spacings (:func:`tank`), so the fluid fills it.
 
-Under the lid the pressure level is free (the fluid is closed in): the tank starts at
-``lid_pressure_factor · ρ_heavy g D`` under the lid (default 1). Measured at 20 rows:
-without it, the case ``D = 0.06`` m, ``Δρ/ρ0 = 0.1`` diverged at 1.26 s (a particle under the
-lid at the right wall reached ``ρ/ρ0 = 0.47``), with it the run completes (+3.1 %). The level
-does not stay: at ``Δρ/ρ0 = 0.03``, ``D = 0.06`` m the mean pressure of the top row falls from
-620 Pa to about 0 between 0.3 and 0.8 s: the fluid expands into the gap between it and
-the wall particles (top gap 0.44 → 0.27 Δx, side gaps 0.5–0.74 → 0.34–0.41 Δx, the fluid
-volume ``Σ M/ρ`` up by 1 %), which the wall particles' pressure does not resist and the
-penalty surface, at Δx/4, does not yet reach. Pressure noise under the lid: the probes
-``top_pressure_spread`` (max − min of the top row's pressure) and ``top_pressure_mean``, reported
-by ``analyse`` after 0.2 s. At ``Δρ/ρ0 = 0.03`` (``Δρ g D = 17.7`` Pa) the median spread is
-164 Pa (``verification/results/fluid_core/gravity.md``); at commit d983bcb it was 98 Pa at the
-defaults, 74 Pa with α = 0.1 and 43 Pa with the former defaults (α = 0.1, Shepard filter,
-free slip). Lower artificial
-viscosity costs quiet here. The tension floor (``negative_pressure="cavitate"``) also
-prevents the collapse, but it opens voids under the lid where the noise dips below zero
-(70 000 floorings at ``D = 0.04`` m, ``Δρ/ρ0 = 0.5``, head −11 %).
+Stabilisation: the recommended set (``mlsgalerkin.fluid.RECOMMENDED``: δ-SPH density diffusion
+within each phase, local shifting, the pressure's linear fit integrated exactly) except a lower
+Monaghan ``α = 0.01``, plus the tank's penalty surface. The head is slow: its numerical Reynolds
+number ``v_h D/ν`` with ``ν = α h c0/8`` is about 170 at the recommended ``α = 0.02`` at 20 rows
+(reported in ``summary.json``), and there the head runs up to 13 % slow where ``α = 0.01`` gives
+−1 to −5 % (``D = 0.04`` and 0.06 m, ``Δρ/ρ0 = 0.5``): of the nine cases at 20 rows in the scaled
+tank 8 are within 10 % at ``α = 0.01``, 6 at ``α = 0.02``. Under the lid the pressure level is free (the fluid is closed in):
+the tank starts at ``lid_pressure_factor · ρ_heavy g D`` under the lid (default 1), and
+:class:`~mlsgalerkin.fluid.ClosedVolume` holds the closed tank's volume (``closed_volume``).
+Without it the collocated continuity equation lost about 1 % of the volume per second under the
+lid, the lid's pressure level ran out in about 0.8 s, and the top row went into tension and
+clumped (``lid_clumping.md``; ``docs/theory/stabilisation.md`` §9).
+
+Measured (``verification/results/fluid_core/gravity.md``; the 3 × 3 matrix of ``D`` = 0.04, 0.06,
+0.12 m and ``Δρ/ρ0`` = 0.1, 0.5, 1): every run completes; within 10 % of the formula are 8 of 9
+in the tank scaled with the depth at 20 rows (``D = 0.12`` m, ``Δρ/ρ0 = 0.1``: +12.3 %), 9 of 9
+in this 0.34 m tank at 20 rows (−8.6 to +6.2 %) and 6 of 9 at the default ``Δx = 3`` mm, which
+is 13 rows at ``D = 0.04`` m (−11.1 and −11.5 %) and 40 at 0.12 m (+13.9 % at ``Δρ/ρ0 = 0.1``:
+the weakly stratified deep head runs towards Benjamin's energy-conserving Froude number 0.5 as
+the numerical viscosity falls). The default case runs −5.0 % (−0.6 % at 4 mm, +3.9 % at 2 mm).
+The largest geometric-volume error is 0.1–0.7 % (1.1 % at 13 rows). Pressure noise under
+the lid: the probes ``top_pressure_spread`` (max − min of the top row's pressure) and
+``top_pressure_mean``, reported by ``analyse`` after 0.2 s.
 
 Why a lid: the formula comes from laboratory currents with ``Δρ/ρ0`` of a few per cent, whose
 free surface barely moves. At ``Δρ/ρ0 = 0.5`` an open surface does move: measured with

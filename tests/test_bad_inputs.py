@@ -179,23 +179,23 @@ def _tank():
 
 
 SCENE_CASES = [
-    ("duplicated body", lambda: Scene([_water(), _water(), _tank()], [FluidScheme([TaitPressure(10.0), Walls()])], t_end=0.1),
+    ("duplicated body", lambda: Scene([_water(), _water(), _tank()], [FluidScheme([TaitPressure(10.0), Walls()], stabilisation="as_listed")], t_end=0.1),
      "body names must be unique"),
-    ("overlapping bodies", lambda: Scene([_water("a"), _water("b", (0.05, 0.0), (0.15, 0.05)), _tank()], [FluidScheme([TaitPressure(10.0), Walls()])], t_end=0.1), "mass counts twice"),
-    ("fluid inside a wall", lambda: Scene([_water("a", (-0.02, 0.0), (0.1, 0.05)), _tank()], [FluidScheme([TaitPressure(10.0), Walls()])], t_end=0.1), "reaches into the walls"),
-    ("fluid outside its walls", lambda: Scene([_water("a", (0.3, 0.0), (0.4, 0.05)), _tank()], [FluidScheme([TaitPressure(10.0), Walls()])], t_end=0.1), "outside the walls"),
-    ("watchdog keeps every 0 steps", lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)])], t_end=0.1, watchdog=Watchdog(keep_every=0)), "keep_every"),
-    ("watchdog bounds", lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)])], t_end=0.1, watchdog=Watchdog(density_ratio=(1.2, 2.0))), "density_ratio"),
-    ("frames every -1 s", lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)])], t_end=0.1, output=Output(every=-1.0)),
+    ("overlapping bodies", lambda: Scene([_water("a"), _water("b", (0.05, 0.0), (0.15, 0.05)), _tank()], [FluidScheme([TaitPressure(10.0), Walls()], stabilisation="as_listed")], t_end=0.1), "mass counts twice"),
+    ("fluid inside a wall", lambda: Scene([_water("a", (-0.02, 0.0), (0.1, 0.05)), _tank()], [FluidScheme([TaitPressure(10.0), Walls()], stabilisation="as_listed")], t_end=0.1), "reaches into the walls"),
+    ("fluid outside its walls", lambda: Scene([_water("a", (0.3, 0.0), (0.4, 0.05)), _tank()], [FluidScheme([TaitPressure(10.0), Walls()], stabilisation="as_listed")], t_end=0.1), "outside the walls"),
+    ("watchdog keeps every 0 steps", lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)], stabilisation="as_listed")], t_end=0.1, watchdog=Watchdog(keep_every=0)), "keep_every"),
+    ("watchdog bounds", lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)], stabilisation="as_listed")], t_end=0.1, watchdog=Watchdog(density_ratio=(1.2, 2.0))), "density_ratio"),
+    ("frames every -1 s", lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)], stabilisation="as_listed")], t_end=0.1, output=Output(every=-1.0)),
      "output.every"),
-    ("keep no checkpoint", lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)])], t_end=0.1, output=Output(keep_checkpoints=0)), "keep_checkpoints"),
-    ("gravity in 3D", lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0), Gravity((0, 0, -9.81))])], t_end=0.1),
+    ("keep no checkpoint", lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)], stabilisation="as_listed")], t_end=0.1, output=Output(keep_checkpoints=0)), "keep_checkpoints"),
+    ("gravity in 3D", lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0), Gravity((0, 0, -9.81))], stabilisation="as_listed")], t_end=0.1),
      "Gravity: g must be"),
     ("inconsistent wall motion", lambda: Scene([_water(), WallBody("w", np.array([[0.0, -0.02]]), 0.01, motion=PrescribedMotion(
-            lambda t: np.array([t, 0.0]), lambda t: np.array([3.0, 0.0]), lambda t: np.zeros(2)))], [FluidScheme([TaitPressure(10.0), Walls("fixed")])], t_end=0.1), "finite difference"),
-    ("unknown integrator", lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)], integrator="rk4")], t_end=0.1),
+            lambda t: np.array([t, 0.0]), lambda t: np.array([3.0, 0.0]), lambda t: np.zeros(2)))], [FluidScheme([TaitPressure(10.0), Walls("fixed")], stabilisation="as_listed")], t_end=0.1), "finite difference"),
+    ("unknown integrator", lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)], integrator="rk4", stabilisation="as_listed")], t_end=0.1),
      "integrator must be"),
-    ("infinite end time", lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)])], t_end=float("inf")), "t_end must be"),
+    ("infinite end time", lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)], stabilisation="as_listed")], t_end=float("inf")), "t_end must be"),
 ]
 
 
@@ -512,7 +512,7 @@ def _block_at(x, y, **kw):
 
 
 def _scene_2d(structure):
-    return Scene([_water(), _tank_2d(), structure], [FluidScheme([TaitPressure(10.0), Walls()])], t_end=0.1)
+    return Scene([_water(), _tank_2d(), structure], [FluidScheme([TaitPressure(10.0), Walls()], stabilisation="as_listed")], t_end=0.1)
 
 
 def _tank_3d():
@@ -549,7 +549,7 @@ def _rigid_3d(lower, upper, **kw):
 
 def _scene_3d(structure):
     water = FluidBody.block("water", (0.0, 0.0, 0.0), (0.05, 0.1, 0.05), 0.01, [Phase("water", 1000.0)])
-    return Scene([water, _tank_3d(), structure], [FluidScheme([TaitPressure(10.0), Walls()])], t_end=0.1)
+    return Scene([water, _tank_3d(), structure], [FluidScheme([TaitPressure(10.0), Walls()], stabilisation="as_listed")], t_end=0.1)
 
 
 STRUCTURE_SCENE_CASES = [

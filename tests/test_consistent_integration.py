@@ -43,7 +43,7 @@ def closed_box(p0: float, effects: list, n: int = 20) -> tuple[Simulation, int]:
     body = FluidBody.block("fluid", (0.0, 0.0), (L, L), DX, [Phase("water", 1000.0)])
     body.density[:] = tait_density(p0, 1000.0, C0)
     walls = wall_box((0.0, 0.0), (L, L), DX, layers=3, open_top=False, reference_density=1000.0)
-    sim = Simulation(Scene([body, walls], [FluidScheme([TaitPressure(C0), Walls("free_slip"), *effects])], t_end=1.0))
+    sim = Simulation(Scene([body, walls], [FluidScheme([TaitPressure(C0), Walls("free_slip"), *effects], stabilisation="as_listed")], t_end=1.0))
     sim.start()
     return sim, body.n
 
@@ -56,7 +56,7 @@ def open_tank(shuffle: float = 0.0) -> Simulation:
         body.positions[:] += shuffle * DX * np.random.default_rng(3).uniform(-1, 1, body.positions.shape)
     body.density[:] = tait_density(300.0, 1000.0, C0)
     walls = wall_box((0.0, 0.0), (20 * DX, 20 * DX), DX, layers=3, open_top=True, reference_density=1000.0)
-    sim = Simulation(Scene([body, walls], [FluidScheme([TaitPressure(C0), Walls("free_slip")])], t_end=1.0))
+    sim = Simulation(Scene([body, walls], [FluidScheme([TaitPressure(C0), Walls("free_slip")], stabilisation="as_listed")], t_end=1.0))
     sim.start()
     return sim
 
@@ -160,7 +160,7 @@ def test_summary_and_bad_input():
     assert summary["full_correction_share_at_end"] == 1.0
     body = FluidBody.block("fluid", (0.0, 0.0), (0.03, 0.03), DX, [Phase("water", 1000.0)])
     walls = wall_box((0.0, 0.0), (0.03, 0.03), DX, layers=3, open_top=False)
-    scene = Scene([body, walls], [FluidScheme([TaitPressure(C0), Walls(), ConsistentIntegration(none=0.98, full=0.97)])], t_end=0.1)
+    scene = Scene([body, walls], [FluidScheme([TaitPressure(C0), Walls(), ConsistentIntegration(none=0.98, full=0.97)], stabilisation="as_listed")], t_end=0.1)
     with pytest.raises(SceneError, match="none < full"):
         scene.validate()
 

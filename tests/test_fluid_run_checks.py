@@ -37,7 +37,7 @@ COLUMNS = ("geometric_volume", "volume_error", "min_pair_distance_dx", "clumped_
 def _tank(water: FluidBody, c0: float = 20.0, t_end: float = 0.02, **scene_kw) -> Scene:
     walls = wall_box((0.0, 0.0), (0.4, 0.4), DX)
     effects = [TaitPressure(c0), Gravity(), Walls(), MonaghanViscosity(0.1)]
-    return Scene([water, walls], [FluidScheme(effects)], t_end=t_end, **scene_kw)
+    return Scene([water, walls], [FluidScheme(effects, stabilisation="as_listed")], t_end=t_end, **scene_kw)
 
 
 def _run(scene: Scene, prepare=None):

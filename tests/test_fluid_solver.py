@@ -57,7 +57,7 @@ def hydrostatic_tank(dx=0.02, H=0.4, W=0.4, t_end=0.3, effects=None, **scene_kw)
     if effects is None:
         effects = [MonaghanViscosity(0.1), DensityFilter(20)]
     listed = [TaitPressure(c0), Gravity(), Walls("free_slip")] + list(effects)
-    return Scene([fl, walls], [FluidScheme(listed, **_scheme_options(scene_kw))], t_end=t_end, name="hydrostatic_tank", **scene_kw)
+    return Scene([fl, walls], [FluidScheme(listed, **_scheme_options(scene_kw), stabilisation="as_listed")], t_end=t_end, name="hydrostatic_tank", **scene_kw)
 
 
 def free_block(dx=0.02, size=0.2, velocity=(0.0, 0.0), effects=(), gravity=False, c0=20.0,
@@ -65,7 +65,7 @@ def free_block(dx=0.02, size=0.2, velocity=(0.0, 0.0), effects=(), gravity=False
     """A block of water at the reference density (p = 0), no walls."""
     fl = FluidBody.block("water", (0.0, 0.0), (size, size), dx, WATER, velocity=velocity)
     listed = [TaitPressure(c0)] + ([Gravity()] if gravity else []) + list(effects)
-    return Scene([fl], [FluidScheme(listed, **_scheme_options(scene_kw))], t_end=t_end, **scene_kw)
+    return Scene([fl], [FluidScheme(listed, **_scheme_options(scene_kw), stabilisation="as_listed")], t_end=t_end, **scene_kw)
 
 
 # ------------------------------------------------------------------ hydrostatic (shared)
@@ -144,7 +144,7 @@ def test_momentum_conserved_with_particle_mass(rng):
     antisymmetric). Measured drift 2e-16 of Σ M |v| over 200 steps."""
     fl = FluidBody.block("water", (0.0, 0.0), (0.3, 0.3), 0.02, WATER)
     fl.velocity[:] = rng.normal(0.0, 0.1, fl.velocity.shape)
-    scene = Scene([fl], [FluidScheme([TaitPressure(10.0), MonaghanViscosity(0.1)], mass="particle")], t_end=1.0)
+    scene = Scene([fl], [FluidScheme([TaitPressure(10.0), MonaghanViscosity(0.1)], mass="particle", stabilisation="as_listed")], t_end=1.0)
     sim = Simulation(scene)
     res = sim.run(progress=False, max_steps=200)
     s = res.state.fluid
@@ -163,7 +163,7 @@ def test_lumped_mass_force_sums_to_zero(rng):
     force sum is asserted."""
     fl = FluidBody.block("water", (0.0, 0.0), (0.3, 0.3), 0.02, WATER)
     fl.velocity[:] = rng.normal(0.0, 0.1, fl.velocity.shape)
-    sim = Simulation(Scene([fl], [FluidScheme([TaitPressure(10.0), MonaghanViscosity(0.1)])], t_end=1.0))
+    sim = Simulation(Scene([fl], [FluidScheme([TaitPressure(10.0), MonaghanViscosity(0.1)], stabilisation="as_listed")], t_end=1.0))
     sim.start()
     s = sim.state.fluid
     worst = 0.0
@@ -322,7 +322,7 @@ def _restart_scene(method: str = "mls", integrator: str = "kdk") -> Scene:
     walls = wall_box((0.0, 0.0), (0.4, 0.4), dx, layers=3)
     effects = [TaitPressure(c0), Gravity(), Walls("free_slip"), MonaghanViscosity(0.1), DensityFilter(5),
                FreeSurfaceDetection()]
-    return Scene([fl, walls], [FluidScheme(effects, approximation=Approximation(method=method), integrator=integrator)], t_end=0.1, output=Output(checkpoint_every=0.02))
+    return Scene([fl, walls], [FluidScheme(effects, approximation=Approximation(method=method), integrator=integrator, stabilisation="as_listed")], t_end=0.1, output=Output(checkpoint_every=0.02))
 
 
 def _assert_same_run(a, b, dir_a: Path, dir_b: Path) -> None:
@@ -392,7 +392,7 @@ def test_splash_isolated_particles_fly_ballistically():
     v = np.zeros((nb + len(iso), 2))
     v[nb:] = v0
     fl = FluidBody("water", np.vstack([block, iso]), dx, WATER, velocity=v)
-    scene = Scene([fl], [FluidScheme([TaitPressure(20.0), Gravity(), MonaghanViscosity(0.1)])], t_end=0.1)
+    scene = Scene([fl], [FluidScheme([TaitPressure(20.0), Gravity(), MonaghanViscosity(0.1)], stabilisation="as_listed")], t_end=0.1)
     res = Simulation(scene).run(progress=False)
     s = res.state.fluid
     assert np.all(np.isfinite(s.x)) and np.all(np.isfinite(s.v)) and np.all(np.isfinite(s.rho))
@@ -409,7 +409,7 @@ def test_splash_isolated_particles_fly_ballistically():
 def test_expansion_reports_tensile_instability():
     fl = FluidBody.block("water", (0.0, 0.0), (0.2, 0.2), 0.02, WATER)
     fl.velocity[:] = 0.5 * (fl.positions - 0.1)  # uniform expansion, ∇·v = 1 /s
-    scene = Scene([fl], [FluidScheme([TaitPressure(20.0), MonaghanViscosity(0.1)])], t_end=0.02)
+    scene = Scene([fl], [FluidScheme([TaitPressure(20.0), MonaghanViscosity(0.1)], stabilisation="as_listed")], t_end=0.02)
     res = Simulation(scene).run(progress=False)
     ti = res.summary["fluid"]["effect_reports"]["tait_pressure"]["tensile_instability"]
     # measured: min pressure −1.5 kPa, all particles in tension
@@ -426,7 +426,7 @@ def test_collinear_row_runs_without_nan(rng):
     x = np.stack([np.arange(n) * dx, 1e-9 * dx * rng.standard_normal(n)], axis=1)
     v = np.stack([0.1 * np.sin(np.arange(n)), np.zeros(n)], axis=1)
     fl = FluidBody("row", x, dx, WATER, velocity=v)
-    scene = Scene([fl], [FluidScheme([TaitPressure(20.0), Gravity(), MonaghanViscosity(0.1)])], t_end=0.05)
+    scene = Scene([fl], [FluidScheme([TaitPressure(20.0), Gravity(), MonaghanViscosity(0.1)], stabilisation="as_listed")], t_end=0.05)
     res = Simulation(scene).run(progress=False)
     s = res.state.fluid
     assert s.step > 50
@@ -472,7 +472,7 @@ def test_drop_impact_smoke(tmp_path):
     walls = wall_box((0.0, 0.0), (W, 2 * Hp), dx, layers=3)
     effects = [TaitPressure(c0), Gravity(), Walls("free_slip"), MonaghanViscosity(0.1),
                NewtonianViscosity()]
-    scene = Scene([pool, drop, walls], [FluidScheme(effects)], t_end=0.03, probes=[Probe("internal_energy", _tait_internal_energy(c0))])
+    scene = Scene([pool, drop, walls], [FluidScheme(effects, stabilisation="as_listed")], t_end=0.03, probes=[Probe("internal_energy", _tait_internal_energy(c0))])
     res = Simulation(scene).run(out=tmp_path, progress=False)  # raises if the watchdog fires
     s, ts = res.state.fluid, res.timeseries
     for arr in (s.x, s.v, s.rho, s.p):

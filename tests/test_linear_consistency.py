@@ -77,7 +77,7 @@ def test_refuses_a_constant_basis():
     from mlsgalerkin.fluid.scheme import FluidScheme
     fl = FluidBody.block("water", (0.0, 0.0), (0.2, 0.2), 0.02, [Phase("water", RHO)])
     scene = Scene([fl], [FluidScheme([TaitPressure(10.0), LinearConsistentPressure()],
-                                     approximation=Approximation(basis="constant"))], t_end=0.1)
+                                     approximation=Approximation(basis="constant"), stabilisation="as_listed")], t_end=0.1)
     with pytest.raises(ValueError, match="linear"):
         Simulation(scene)
 

@@ -86,7 +86,7 @@ def _flap_scene(motion, t_end=0.02):
     flap_x = lattice((-0.03, 0.0), (0.0, 0.15), dx)
     flap = WallBody("flap", flap_x, dx, normals=np.tile([1.0, 0.0], (len(flap_x), 1)), motion=motion)
     return Scene([water, floor, flap], [FluidScheme([TaitPressure(15.0), Gravity((0.0, -9.81)), Walls("free_slip"),
-                                        MonaghanViscosity(0.1)])], t_end=t_end), flap_x
+                                        MonaghanViscosity(0.1)], stabilisation="as_listed")], t_end=t_end), flap_x
 
 
 def test_a_rotating_wall_moves_its_particles_velocities_accelerations_and_normals():

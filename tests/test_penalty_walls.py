@@ -63,7 +63,7 @@ def test_hydrostatic_column_on_a_penalty_floor():
     walls = wall_box((0.0, 0.0), (H, 1.5 * H), dx, layers=3, surface=True)
     effects = [TaitPressure(c0), Gravity(), Walls("free_slip"), PenaltyWalls(), MonaghanViscosity(0.1),
                DensityFilter(20)]
-    res = Simulation(Scene([column(dx, H, H), walls], [FluidScheme(effects)], t_end=0.5)).run(progress=False)
+    res = Simulation(Scene([column(dx, H, H), walls], [FluidScheme(effects, stabilisation="as_listed")], t_end=0.5)).run(progress=False)
     s, ts = res.state.fluid, res.timeseries
     f = s.fluid
     penetration = np.asarray(ts["penalty_max_penetration_dx"])
@@ -90,7 +90,7 @@ def test_wall_force_sensor_carries_the_weight_of_a_column_on_a_bare_surface():
     assert tank.n == 0 and tank.surface is not None
     effects = [TaitPressure(c0), Gravity(), PenaltyWalls(), MonaghanViscosity(0.1), DensityFilter(20)]
     with pytest.warns(SurfaceOnlyWallWarning, match="only a penalty surface"):
-        res = Simulation(Scene([column(dx, H, H), tank], [FluidScheme(effects)], t_end=2.0)).run(progress=False)
+        res = Simulation(Scene([column(dx, H, H), tank], [FluidScheme(effects, stabilisation="as_listed")], t_end=2.0)).run(progress=False)
     ts = res.timeseries
     assert set(sensor_columns("walls", 2)) <= set(ts) and sensor_columns("walls", 2)[-1] == "wall_moment_walls"
     t = np.asarray(ts["time"])
@@ -116,7 +116,7 @@ def test_sensor_columns_are_the_kernel_reaction_at_that_evaluation():
     water = FluidBody.block("water", (0.02, 0.0), (0.12, 0.06), dx, WATER, velocity=(-0.5, -0.5))
     walls = wall_box((0.0, 0.0), (0.2, 0.2), dx, layers=3, surface=True)
     pw = PenaltyWalls(moment_about={"walls": (0.1, 0.05)})
-    sim = Simulation(Scene([water, walls], [FluidScheme([TaitPressure(20.0), Gravity(), Walls(), pw])], t_end=0.02))
+    sim = Simulation(Scene([water, walls], [FluidScheme([TaitPressure(20.0), Gravity(), Walls(), pw], stabilisation="as_listed")], t_end=0.02))
     res = sim.run(progress=False)
     s = res.state.fluid
     f = s.fluid
@@ -143,7 +143,7 @@ def test_penalty_walls_stop_a_leak():
         walls = wall_box((0.0, 0.0), (0.2, 0.4), dx, layers=3, surface=penalty)
         effects = [TaitPressure(30.0), Gravity(), Walls(), MonaghanViscosity(0.05)] + ([PenaltyWalls()] if penalty
                                                                                         else [])
-        return Simulation(Scene([water, walls], [FluidScheme(effects)], t_end=0.03)).run(progress=False).timeseries
+        return Simulation(Scene([water, walls], [FluidScheme(effects, stabilisation="as_listed")], t_end=0.03)).run(progress=False).timeseries
 
     leaky, held = run(False), run(True)
     assert np.max(leaky["max_wall_penetration_dx"]) > 0.3 and np.max(leaky["wall_penetrations"]) >= 1
@@ -158,7 +158,7 @@ def test_a_block_falls_into_a_3d_tank_surface():
     box = WallBody("box", surface=ContactSurface.tank((0, 0, 0), (0.14, 0.14, 0.3)))
     with pytest.warns(SurfaceOnlyWallWarning):
         res = Simulation(Scene([water, box], [FluidScheme([TaitPressure(20.0), Gravity((0, 0, -G)), PenaltyWalls(),
-                                              MonaghanViscosity(0.1)])], t_end=0.05)).run(progress=False)
+                                              MonaghanViscosity(0.1)], stabilisation="as_listed")], t_end=0.05)).run(progress=False)
     ts = res.timeseries
     assert set(sensor_columns("box", 3)) <= set(ts)
     assert np.max(ts["wall_force_z_box"]) <= 0 < -np.min(ts["wall_force_z_box"])  # pushed down, never pulled up
@@ -174,7 +174,7 @@ def test_the_contact_time_step_limit_joins_the_minimum():
     water = FluidBody.block("water", (0.0, 0.0), (0.1, 0.05), dx, WATER)
     walls = wall_box((0.0, 0.0), (0.1, 0.1), dx, layers=3, surface=True)
     pw = PenaltyWalls(dt_ref=2e-6, alpha=0.05, damping=0.1)
-    res = Simulation(Scene([water, walls], [FluidScheme([TaitPressure(10.0), Gravity(), Walls(), pw], safety=0.9)], t_end=2e-4)).run(progress=False)
+    res = Simulation(Scene([water, walls], [FluidScheme([TaitPressure(10.0), Gravity(), Walls(), pw], safety=0.9, stabilisation="as_listed")], t_end=2e-4)).run(progress=False)
     expected = 0.9 * rigid_time_step(0.05, 0.1, 2e-6, 2)
     assert expected == pytest.approx(0.9 * 0.5 * 2 * (math.sqrt(1.01) - 0.1) * 2e-6 / math.sqrt(0.1))
     dts = np.asarray(res.timeseries["dt"])
@@ -182,7 +182,7 @@ def test_the_contact_time_step_limit_joins_the_minimum():
     np.testing.assert_allclose(dts[1:-1], expected, rtol=1e-14)
     assert res.summary["fluid"]["effect_reports"]["penalty_walls"]["time_step_limit_s"] == expected / 0.9
     # by default the reference step is the fluid's first step and the contact never binds
-    free = Simulation(Scene([water, wall_box((0.0, 0.0), (0.1, 0.1), dx, layers=3, surface=True)], [FluidScheme([TaitPressure(10.0), Gravity(), Walls(), PenaltyWalls()])], t_end=2e-3)).run(progress=False)
+    free = Simulation(Scene([water, wall_box((0.0, 0.0), (0.1, 0.1), dx, layers=3, surface=True)], [FluidScheme([TaitPressure(10.0), Gravity(), Walls(), PenaltyWalls()], stabilisation="as_listed")], t_end=2e-3)).run(progress=False)
     rep = free.summary["fluid"]["effect_reports"]["penalty_walls"]
     assert rep["dt_ref_s"] == free.timeseries["dt"][1] and rep["time_step_limit_s"] > 2 * rep["dt_ref_s"]
 
@@ -195,7 +195,7 @@ def test_a_moving_walls_surface_follows_its_motion():
     paddle = WallBody("paddle", surface=ContactSurface.polyline([(0.02, -0.01), (0.02, 0.1)]), motion=motion)
     walls = wall_box((0.0, 0.0), (0.2, 0.1), dx, layers=3, surface=True)
     with pytest.warns(SurfaceOnlyWallWarning, match="paddle"):
-        res = Simulation(Scene([water, walls, paddle], [FluidScheme([TaitPressure(20.0), Gravity(), Walls(), PenaltyWalls()])], t_end=0.02)).run(progress=False)
+        res = Simulation(Scene([water, walls, paddle], [FluidScheme([TaitPressure(20.0), Gravity(), Walls(), PenaltyWalls()], stabilisation="as_listed")], t_end=0.02)).run(progress=False)
     s = res.state.fluid
     surf = s.wall_surfaces["paddle"]
     np.testing.assert_allclose(surf.x, motion.positions(paddle.surface.nodes, s.t), rtol=0, atol=1e-15)
@@ -211,7 +211,7 @@ def _falling_scene() -> Scene:
     walls = wall_box((0.0, 0.0), (0.4, 0.4), dx, layers=3, surface=True)
     effects = [TaitPressure(c0), Gravity(), Walls("free_slip"), PenaltyWalls(moment_about=(0.2, 0.0)),
                MonaghanViscosity(0.1), DensityFilter(5)]
-    return Scene([water, walls], [FluidScheme(effects)], t_end=0.06, output=Output(checkpoint_every=0.015))
+    return Scene([water, walls], [FluidScheme(effects, stabilisation="as_listed")], t_end=0.06, output=Output(checkpoint_every=0.015))
 
 
 @pytest.fixture(scope="module")
@@ -265,7 +265,7 @@ def _box(**kw):
 
 def _scene(effect=None, bodies=None):
     bodies = [_water(), _box(surface=True)] if bodies is None else bodies
-    return Scene(bodies, [FluidScheme([TaitPressure(10.0), Walls(), effect or PenaltyWalls()])], t_end=0.1)
+    return Scene(bodies, [FluidScheme([TaitPressure(10.0), Walls(), effect or PenaltyWalls()], stabilisation="as_listed")], t_end=0.1)
 
 
 BAD_SCENES = [
@@ -282,12 +282,12 @@ BAD_SCENES = [
     ("moment of an unknown wall", lambda: _scene(PenaltyWalls(moment_about={"lid": (0, 0)})),
      "moment_about names 'lid'"),
     ("no surface to touch", lambda: _scene(bodies=[_water(), _box()]), "no wall body has a penalty surface"),
-    ("surface without the effect", lambda: Scene([_water(), _box(surface=True)], [FluidScheme([TaitPressure(10.0), Walls()])], t_end=0.1), "list PenaltyWalls()"),
-    ("surface-only wall with Walls only", lambda: Scene([_water(), _box(layers=0, surface=True)], [FluidScheme([TaitPressure(10.0), Walls()])], t_end=0.1),
+    ("surface without the effect", lambda: Scene([_water(), _box(surface=True)], [FluidScheme([TaitPressure(10.0), Walls()], stabilisation="as_listed")], t_end=0.1), "list PenaltyWalls()"),
+    ("surface-only wall with Walls only", lambda: Scene([_water(), _box(layers=0, surface=True)], [FluidScheme([TaitPressure(10.0), Walls()], stabilisation="as_listed")], t_end=0.1),
      "a wall of only a penalty surface needs PenaltyWalls"),
     ("fluid behind the surface", lambda: Scene([
         FluidBody.block("water", (0.0, -0.02), (0.1, 0.05), 0.01, WATER),
-        WallBody("floor", surface=ContactSurface.polyline([(0.3, 0.0), (-0.1, 0.0)]))], [FluidScheme([TaitPressure(10.0), PenaltyWalls()])], t_end=0.1), "start behind the penalty surface of wall body 'floor'"),
+        WallBody("floor", surface=ContactSurface.polyline([(0.3, 0.0), (-0.1, 0.0)]))], [FluidScheme([TaitPressure(10.0), PenaltyWalls()], stabilisation="as_listed")], t_end=0.1), "start behind the penalty surface of wall body 'floor'"),
     ("3D surface in a 2D scene", lambda: _scene(bodies=[_water(), _box(), WallBody(
         "lid", surface=ContactSurface.tank((0, 0, 0), (1, 1, 1)))]), "bodies mix dimensions [2, 3]"),
 ]

@@ -51,7 +51,7 @@ def _problems(scene: Scene) -> str:
 
 # ------------------------------------------------------------------------------ validation
 def test_validation_lists_every_problem_at_once():
-    scene = Scene([_water(), "banana"], [FluidScheme([Gravity(), Walls("free_slip"), _Needy()])], t_end=-1.0, name="broken")
+    scene = Scene([_water(), "banana"], [FluidScheme([Gravity(), Walls("free_slip"), _Needy()], stabilisation="as_listed")], t_end=-1.0, name="broken")
     msg = _problems(scene)
     expected = [
         "unknown body 'banana'",
@@ -71,19 +71,19 @@ def test_validation_lists_every_problem_at_once():
 @pytest.mark.parametrize(
     "make, fragment",
     [
-        (lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0), TaitPressure(20.0)])], t_end=0.1),
+        (lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0), TaitPressure(20.0)], stabilisation="as_listed")], t_end=0.1),
          "two pressure models listed"),
-        (lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0), Gravity(), Gravity()])], t_end=0.1),
+        (lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0), Gravity(), Gravity()], stabilisation="as_listed")], t_end=0.1),
          "effects listed twice: ['Gravity']"),
-        (lambda: Scene([_water(), WallBody("w", np.array([[0.0, -0.01], [0.02, -0.01]]), DX)], [FluidScheme([TaitPressure(10.0), Walls("free_slip")])], t_end=0.1),
+        (lambda: Scene([_water(), WallBody("w", np.array([[0.0, -0.01], [0.02, -0.01]]), DX)], [FluidScheme([TaitPressure(10.0), Walls("free_slip")], stabilisation="as_listed")], t_end=0.1),
          "free_slip needs wall normals"),
-        (lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)], approximation=Approximation(kernel="no_such_kernel"))], t_end=0.1),
+        (lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)], approximation=Approximation(kernel="no_such_kernel"), stabilisation="as_listed")], t_end=0.1),
          "unknown kernel 'no_such_kernel'"),
-        (lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)])], t_end=0.1, probes=[Probe("T_mean", lambda s: 0.0, reads=("temperature",))]),
+        (lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0)], stabilisation="as_listed")], t_end=0.1, probes=[Probe("T_mean", lambda s: 0.0, reads=("temperature",))]),
          "probe 'T_mean' reads ['temperature']"),
-        (lambda: Scene([_water(), wall_box((0, 0), (0.2, 0.2), DX)], [FluidScheme([TaitPressure(10.0)])], t_end=0.1),
+        (lambda: Scene([_water(), wall_box((0, 0), (0.2, 0.2), DX)], [FluidScheme([TaitPressure(10.0)], stabilisation="as_listed")], t_end=0.1),
          "no wall treatment: list Walls()"),
-        (lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0), "viscosity"])], t_end=0.1),
+        (lambda: Scene([_water()], [FluidScheme([TaitPressure(10.0), "viscosity"], stabilisation="as_listed")], t_end=0.1),
          "unknown effect 'viscosity'"),
     ],
     ids=["two_pressure", "duplicate", "free_slip_no_normals", "kernel", "probe", "walls_untreated",
@@ -94,7 +94,7 @@ def test_single_problems_are_reported(make, fragment):
 
 
 def test_valid_scene_passes():
-    Scene([_water(), wall_box((0, 0), (0.2, 0.2), DX)], [FluidScheme([TaitPressure(10.0), Gravity(), Walls("free_slip")])], t_end=0.1).validate()
+    Scene([_water(), wall_box((0, 0), (0.2, 0.2), DX)], [FluidScheme([TaitPressure(10.0), Gravity(), Walls("free_slip")], stabilisation="as_listed")], t_end=0.1).validate()
 
 
 def test_simulation_validates_before_any_work(monkeypatch):
@@ -111,7 +111,7 @@ def test_simulation_validates_before_any_work(monkeypatch):
         def setup(self, state, scene):
             setups.append(1)
 
-    scene = Scene([_water()], [FluidScheme([Gravity(), Recorder(), _Needy()])], t_end=0.0)
+    scene = Scene([_water()], [FluidScheme([Gravity(), Recorder(), _Needy()], stabilisation="as_listed")], t_end=0.0)
     with pytest.raises(SceneError) as err:
         Simulation(scene)
     assert "no pressure model" in str(err.value) and "t_end must be positive" in str(err.value)
@@ -146,7 +146,7 @@ def calls(monkeypatch):
 
 def test_only_listed_effects_are_called(calls):
     fl = _water(velocity=(0.1, 0.0))
-    Simulation(Scene([fl], [FluidScheme([TaitPressure(10.0)])], t_end=0.01)).run(progress=False)
+    Simulation(Scene([fl], [FluidScheme([TaitPressure(10.0)], stabilisation="as_listed")], t_end=0.01)).run(progress=False)
     called = {c for c, _ in calls}
     assert called == {"TaitPressure"}, called
     # the pressure model ran in its stage and supplied a time-step limit
@@ -166,7 +166,7 @@ def test_custom_effect_is_called_in_its_declared_stages_only(calls):
         def force(self, s): calls.append(("Probe2", "force"))
         def after_step(self, s): calls.append(("Probe2", "after_step"))
 
-    sim = Simulation(Scene([_water()], [FluidScheme([TaitPressure(10.0), Probe2()])], t_end=1.0))
+    sim = Simulation(Scene([_water()], [FluidScheme([TaitPressure(10.0), Probe2()], stabilisation="as_listed")], t_end=1.0))
     res = sim.run(progress=False, max_steps=5)
     mine = [m for c, m in calls if c == "Probe2"]
     # stress: once per evaluation (initial + one per kdk step); after_step once per step
@@ -181,7 +181,7 @@ def test_time_report_has_one_entry_per_listed_effect():
     walls = wall_box((0, 0), (0.2, 0.2), DX)
     listed = [TaitPressure(20.0), Gravity(), Walls("free_slip"), MonaghanViscosity(0.1),
               DensityFilter(5)]
-    res = Simulation(Scene([_water(), walls], [FluidScheme(listed)], t_end=0.01)).run(progress=False)
+    res = Simulation(Scene([_water(), walls], [FluidScheme(listed, stabilisation="as_listed")], t_end=0.01)).run(progress=False)
     report = res.summary["fluid"]["time_per_stage_s"]
     for e in listed:
         assert e.name in report and report[e.name] >= 0.0
@@ -206,11 +206,14 @@ def test_the_scene_before_schemes_runs_with_a_warning_that_shows_the_new_form():
     (fluid,) = old.schemes
     assert isinstance(fluid, FluidScheme)
     assert fluid.approximation.h_factor == 1.5 and fluid.dt_max == 1e-4
-    assert [type(e).__name__ for e in fluid.effects] == ["TaitPressure", "Gravity", "Walls"]
+    # the old form lists no stabilisation either: it gets the recommended set, like a scheme
+    assert [type(e).__name__ for e in fluid.effects] == ["TaitPressure", "Gravity", "Walls", "MonaghanViscosity",
+                                                         "DensityDiffusion", "ParticleShifting",
+                                                         "LinearConsistentPressure"]
     with pytest.warns(DeprecationWarning, match="FluidScheme"):
         assert old.effects is fluid.effects and old.dt_max == 1e-4   # old attribute reads still work
     new = Scene(old.bodies, [FluidScheme(list(fluid.effects), approximation=Approximation(h_factor=1.5),
-                                         dt_max=1e-4)], t_end=0.01)
+                                         dt_max=1e-4, stabilisation="as_listed")], t_end=0.01)
     a = Simulation(old).run(progress=False).timeseries
     b = Simulation(new).run(progress=False).timeseries
     assert all(np.array_equal(a[k], b[k]) for k in a)          # the same run, bit for bit
@@ -228,18 +231,18 @@ def test_validation_reads_only():
 
 def test_one_spacing_walls_on_another_lattice_are_refused():
     coarse = wall_box((0.0, 0.0), (0.3, 0.2), 2 * DX, layers=3)
-    msg = _problems(Scene([_water(), coarse], [FluidScheme([TaitPressure(10.0), Walls()])], t_end=0.1))
+    msg = _problems(Scene([_water(), coarse], [FluidScheme([TaitPressure(10.0), Walls()], stabilisation="as_listed")], t_end=0.1))
     assert f"has particles {2 * DX:g} m apart but the fluid's spacing is {DX:g} m" in msg
-    msg = _problems(Scene([_water()], [FluidScheme([TaitPressure(10.0)], spacing=0.5 * DX)], t_end=0.1))
+    msg = _problems(Scene([_water()], [FluidScheme([TaitPressure(10.0)], spacing=0.5 * DX, stabilisation="as_listed")], t_end=0.1))
     assert "are not built at the scheme's spacing" in msg
 
 
 def test_scheme_problems_and_unknown_or_doubled_schemes_are_reported():
-    msg = _problems(Scene([_water()], [FluidScheme([TaitPressure(10.0)], safety=2.0, mass="heavy"), "fast"],
+    msg = _problems(Scene([_water()], [FluidScheme([TaitPressure(10.0)], safety=2.0, mass="heavy", stabilisation="as_listed"), "fast"],
                           t_end=0.1))
     assert "safety factor must be in (0, 1.5]" in msg and "mass must be" in msg
     assert "unknown scheme 'fast'" in msg
-    msg = _problems(Scene([_water()], [FluidScheme([TaitPressure(10.0)]), FluidScheme([TaitPressure(10.0)])],
+    msg = _problems(Scene([_water()], [FluidScheme([TaitPressure(10.0)], stabilisation="as_listed"), FluidScheme([TaitPressure(10.0)], stabilisation="as_listed")],
                           t_end=0.1))
     assert "two schemes for one solver" in msg
 
@@ -247,14 +250,15 @@ def test_scheme_problems_and_unknown_or_doubled_schemes_are_reported():
 def test_a_scheme_without_its_bodies_is_reported():
     from mlsgalerkin.structure import StructureScheme
 
-    msg = _problems(Scene([_water()], [FluidScheme([TaitPressure(10.0)]), StructureScheme(dt_max=1e-3)], t_end=0.1))
+    msg = _problems(Scene([_water()], [FluidScheme([TaitPressure(10.0)], stabilisation="as_listed"), StructureScheme(dt_max=1e-3)], t_end=0.1))
     assert "StructureScheme is listed but no body is advanced by its solver" in msg
 
 
-def test_water_preset_is_the_impact_problems_set():
+def test_water_preset_is_the_recommended_set():
     scheme = fluid_mod.water(20.0, spacing=0.01, penalty_thickness=0.0025)
     assert [type(e).__name__ for e in scheme.effects] == [
-        "TaitPressure", "Gravity", "Walls", "MonaghanViscosity", "DensityDiffusion", "ParticleShifting", "PenaltyWalls"]
+        "TaitPressure", "Gravity", "Walls", "MonaghanViscosity", "DensityDiffusion", "ParticleShifting", "PenaltyWalls",
+        "LinearConsistentPressure"]
     pressure, _, _, viscosity, diffusion, *_ = scheme.effects
     assert pressure.c0 == 20.0 and pressure.negative_pressure == "cavitate"
     assert viscosity.alpha == 0.02 and diffusion.delta == 0.1
@@ -267,6 +271,6 @@ def test_effects_read_the_sound_speed_from_the_state():
     with it read it there, whatever the listed order."""
     walls = wall_box((0.0, 0.0), (0.3, 0.2), DX, layers=3)
     effects = [MonaghanViscosity(0.1), Gravity(), Walls(), TaitPressure(12.5)]   # pressure listed last
-    sim = Simulation(Scene([_water(), walls], [FluidScheme(effects)], t_end=0.01))
+    sim = Simulation(Scene([_water(), walls], [FluidScheme(effects, stabilisation="as_listed")], t_end=0.01))
     assert sim.state.fluid.c0 == 12.5
     assert effects[0].nu == pytest.approx(0.1 * 1.3 * DX * 12.5 / 8)

@@ -35,7 +35,7 @@ def settled_tank(depth=0.3, width=0.3, dx=0.015, t_end=0.3):
     water = FluidBody.block("water", (0.0, 0.0), (width, depth), dx, [Phase("water", 1000.0)])
     water.density[:] = eos.density(1000.0 * G * (depth - water.positions[:, 1]))
     walls = wall_box((0.0, 0.0), (width, 2 * depth), dx, layers=3)
-    scene = Scene([water, walls], [FluidScheme([TaitPressure(c0), Gravity(), Walls("free_slip"), MonaghanViscosity(0.1)])], t_end=t_end, name="tank")
+    scene = Scene([water, walls], [FluidScheme([TaitPressure(c0), Gravity(), Walls("free_slip"), MonaghanViscosity(0.1)], stabilisation="as_listed")], t_end=t_end, name="tank")
     return Simulation(scene).run(out=None, progress=False).state.fluid
 
 

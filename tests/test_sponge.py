@@ -26,7 +26,7 @@ def test_damps_inside_the_zone_only():
     # end of the zone decay as exp(−rate t), the ones before its start keep their speed
     fl = FluidBody.block("water", (0.0, 0.0), (0.4, 0.1), 0.02, [Phase("water", 1000.0)], velocity=(0.0, 1.0))
     rate, t_end = 5.0, 0.1
-    scene = Scene([fl], [FluidScheme([TaitPressure(20.0), SpongeZone(0.1, 0.1, rate)])], t_end=t_end)
+    scene = Scene([fl], [FluidScheme([TaitPressure(20.0), SpongeZone(0.1, 0.1, rate)], stabilisation="as_listed")], t_end=t_end)
     res = Simulation(scene).run(progress=False)
     s = res.state.fluid
     x0 = fl.positions[:, 0]
@@ -55,7 +55,7 @@ def test_takes_energy_out_of_a_sloshing_tank():
 
 def test_bad_zone_is_refused():
     fl = FluidBody.block("water", (0.0, 0.0), (0.2, 0.2), 0.02, [Phase("water", 1000.0)])
-    scene = Scene([fl], [FluidScheme([TaitPressure(20.0), SpongeZone(0.1, 0.0, -1.0, axis=3)])], t_end=0.1)
+    scene = Scene([fl], [FluidScheme([TaitPressure(20.0), SpongeZone(0.1, 0.0, -1.0, axis=3)], stabilisation="as_listed")], t_end=0.1)
     with pytest.raises(ValueError) as err:
         Simulation(scene)
     text = str(err.value)

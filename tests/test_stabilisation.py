@@ -204,7 +204,7 @@ def tank(effects, dx=0.02, depth=0.3, width=0.3, t_end=0.2, **kw) -> Scene:
     water.density[:] = eos.density(1000.0 * G * (depth - water.positions[:, 1]))
     walls = wall_box((0.0, 0.0), (width, 2.0 * depth), dx, layers=3)   # rows on the lattice
     listed = [TaitPressure(c0), Gravity(), Walls("free_slip"), MonaghanViscosity(0.02)] + list(effects)
-    return Scene([water, walls], [FluidScheme(listed, **_scheme_options(kw))], t_end=t_end, name="tank", **kw)
+    return Scene([water, walls], [FluidScheme(listed, **_scheme_options(kw), stabilisation="as_listed")], t_end=t_end, name="tank", **kw)
 
 
 def test_tank_with_diffusion_and_shifting_stays_at_rest():

@@ -55,7 +55,7 @@ def test_a_3d_water_block_lands_on_a_clamped_plate():
     plate = ElasticBody("plate", mesh, ElasticMaterial(1e7, 0.3, 1000.0), "Hex1", clamped=edge,
                         wet=lambda x: np.isclose(x[2], 0.0), points={"mid": (0.1, 0.1, -0.005)})
     water = FluidBody.block("water", (0.07, 0.07, 0.005), (0.13, 0.13, 0.065), dx, [Phase("water", 1000.0)])
-    scene = Scene([water, plate], [FluidScheme([TaitPressure(10.0), Gravity((0.0, 0.0, -9.81)), MonaghanViscosity(0.1)])], t_end=0.1, interactions=[PenaltyContact("water", "plate", thickness=0.5 * dx)])
+    scene = Scene([water, plate], [FluidScheme([TaitPressure(10.0), Gravity((0.0, 0.0, -9.81)), MonaghanViscosity(0.1)], stabilisation="as_listed")], t_end=0.1, interactions=[PenaltyContact("water", "plate", thickness=0.5 * dx)])
     res = Simulation(scene).run(progress=False)
     ts = res.timeseries
     assert res.summary["status"] == "completed"
@@ -528,7 +528,7 @@ def _water_on_a_3d_plate(t_end: float, ny: int = 10, nx: int = 5):
     coupling = StructureCoupling("water", "plate", walls="plate_walls", thickness=0.25 * dx, wall_acceleration=1.0)
     n = water.n
     scene = Scene([water, walls, riding, plate], [FluidScheme([TaitPressure(c0), Gravity((0.0, 0.0, -g)), Walls("free_slip"), MonaghanViscosity(0.2),
-                   DensityFilter(20)], approximation=Approximation(h_factor=1.3))], t_end=t_end, interactions=[coupling], probes=[Probe("lowest_water", lambda state: float(state.fluid.x[:n, 2].min()))])
+                   DensityFilter(20)], approximation=Approximation(h_factor=1.3), stabilisation="as_listed")], t_end=t_end, interactions=[coupling], probes=[Probe("lowest_water", lambda state: float(state.fluid.x[:n, 2].min()))])
     return scene, plate, water.n * rho * dx**3 * g, rho * g * H
 
 

@@ -54,7 +54,7 @@ def test_penetration_is_reported_in_time_series_summary_and_warned():
     # one particle already 0.7 spacings inside the floor, midway between two columns of wall
     # particles: more than half a spacing from each, so the geometry check lets it through
     water.positions[3] = (0.03, -0.7 * DX)
-    scene = Scene([water, wall_box((0.0, 0.0), (0.1, 0.1), DX)], [FluidScheme([TaitPressure(10.0), Gravity(), Walls()])], t_end=0.002)
+    scene = Scene([water, wall_box((0.0, 0.0), (0.1, 0.1), DX)], [FluidScheme([TaitPressure(10.0), Gravity(), Walls()], stabilisation="as_listed")], t_end=0.002)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         res = Simulation(scene).run(progress=False)
@@ -98,7 +98,7 @@ def test_water_overflowing_an_open_tank_is_not_a_leak():
     water = FluidBody.block("water", (0.0, 0.0), (0.2, 0.12), DX, [Phase("water", 1000.0)])
     box = wall_box((0.0, 0.0), (0.2, 0.04), DX)
     scene = Scene([water, box], [FluidScheme([TaitPressure(15.0, negative_pressure="cavitate"), Gravity(), Walls(),
-                                              MonaghanViscosity(0.1)])], t_end=0.2)
+                                              MonaghanViscosity(0.1)], stabilisation="as_listed")], t_end=0.2)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         res = Simulation(scene).run(progress=False)
