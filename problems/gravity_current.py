@@ -17,8 +17,8 @@ Benjamin's energy-conserving 0.5), no-slip walls 3–7 % slow (measured at commi
 3 × 3 matrix of ``verification/results/fluid_core/gravity.md``). The no-slip wall particles
 continue the fluid's tangential velocity to their own depth, with the normal component
 mirrored, and the Newtonian viscosity is stabilised (``docs/theory/galerkin_fluid.md`` §6, §13):
-the default case (``D = 0.06`` m, ``Δρ/ρ0 = 0.5``, ``Δx = 3`` mm) runs +6.0 %, at ``Δx = 6`` mm
-−8.9 %; with the normal component continued too it ran −0.1 % and −14.4 %, with the top row's
+with direct nodal integration the default case (``D = 0.06`` m, ``Δρ/ρ0 = 0.5``, ``Δx = 3`` mm)
+ran +6.0 %, at ``Δx = 6`` mm −8.9 %; with the normal component continued too −0.1 % and −14.4 %, with the top row's
 pressure spread (median) 4113 and 2907 Pa instead of 532 and 364 Pa
 (``verification/results/quiet_state/lid_clumping.md``). The particles start at the compressible
 hydrostatic densities (``hydrostatic_density(..., compressible=True)``). The simulated tank is

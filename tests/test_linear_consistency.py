@@ -29,7 +29,7 @@ def first_acceleration(extra, *, length=0.4, depth=0.2, dx=0.02, gravity=True, o
         fl.density[:] *= (1.0 + offset * 7.0 / (RHO * c0**2)) ** (1 / 7.0)
     walls = wall_box((0.0, 0.0), (length, 1.5 * depth), dx, layers=3, reference_density=RHO)
     scheme = water(c0, gravity=(0.0, -G) if gravity else None, spacing=dx, negative_pressure="allow",
-                   extra=extra)
+                   linear_consistency=False, extra=extra)
     sim = Simulation(Scene([fl, walls], [scheme], t_end=1.0))
     sim.run(max_steps=1, progress=False)
     s = sim.state.fluid
@@ -124,7 +124,7 @@ def test_compiled_kernels_agree_with_the_numpy_reference_across_a_periodic_seam(
     fl.positions[:] += rng.uniform(-0.15, 0.15, fl.positions.shape) * dx
     fl.density[:] = tait_density(50.0 * np.sin(2 * math.pi * fl.positions[:, 0] / side), np.full(fl.n, RHO), c0)
     scheme = water(c0, gravity=None, slip=None, spacing=dx, negative_pressure="allow", shifting="off",
-                   periodic=Periodic(x=(0.0, side), y=(0.0, side)), extra=[LinearConsistentPressure()])
+                   periodic=Periodic(x=(0.0, side), y=(0.0, side)))   # the set lists LinearConsistentPressure
     sim = Simulation(Scene([fl], [scheme], t_end=1.0))
     sim.run(max_steps=2, progress=False)
     s = sim.state.fluid
