@@ -11,7 +11,7 @@ and a read-only :class:`~mlsgalerkin.dynamics.SceneView`, never the scene.
 
 >>> from mlsgalerkin.fluid import FluidBody, FluidScheme, Phase, Gravity
 >>> water = FluidBody.block("water", (0, 0), (0.1, 0.05), 0.01, [Phase("water", 1000.0)])
->>> scene = Scene([water], [FluidScheme([Gravity()])], t_end=0.1)
+>>> scene = Scene([water], [FluidScheme([Gravity()], stabilisation="as_listed")], t_end=0.1)
 >>> try:
 ...     scene.validate()
 ... except SceneError as err:
