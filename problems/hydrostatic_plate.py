@@ -68,6 +68,7 @@ class Parameters:
     wall_acceleration: float = 1.0  #: share of the plate's acceleration the wall pressure sees, 0 to 1 (–)
     t_end: float = 0.5          #: end time (s)
     alpha: float = RECOMMENDED.alpha  #: Monaghan artificial viscosity α (–)
+    linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     c0_factor: float = 10.0     #: sound speed / sqrt(2 g H) (–)
     g: float = 9.81             #: gravitational acceleration (m/s²)
     frame_every: float = 0.05   #: time between VTU frames (s)
@@ -123,7 +124,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
 
     return Scene(
         [water_body, _side_walls(p), riding, plate],
-        [water(c0, gravity=(0.0, -p.g), alpha=p.alpha, spacing=p.dx)],
+        [water(c0, gravity=(0.0, -p.g), alpha=p.alpha, linear_consistency=p.linear_consistency,
+               spacing=p.dx)],
         t_end=p.t_end, name="hydrostatic_plate",
         interactions=[coupling],
         output=Output(every=p.frame_every, probe_every=0.001, gif=p.gif, png=p.gif, color_by="pressure"),

@@ -54,7 +54,7 @@ def test_every_fluid_problem_defaults_to_the_recommended_set(name):
     if name in VISCOUS_CHECKS:
         expected.pop("alpha")
         assert params.alpha == 0.0
-    assert "linear_consistency" in expected or name == "hydrostatic_plate"
+    assert "linear_consistency" in expected
     expected.update({k: v for k, v in DEPARTURES.get(name, {}).items() if k in expected})
     got = {k: getattr(params, k) for k in expected}
     assert got == expected, f"{name} departs from the recommended set: {got} != {expected}"

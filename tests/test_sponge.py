@@ -38,7 +38,12 @@ def test_damps_inside_the_zone_only():
 
 
 def test_takes_energy_out_of_a_sloshing_tank():
-    def run(extra):
+    """The energy of the motion, kinetic + potential + compression above the rest state the run
+    starts from (``E(t) − (E(0) − K(0))``), at 0.5 s (under half a sloshing period): measured
+    0.673 J/m with the zone against 0.799 J/m without it (0.84; 0.82 without the linear
+    consistency). The kinetic energy alone swings with the acoustic waves the initial flow's
+    compression sends (0.03 to 0.3 J/m within 0.1 s), so one sample of it says little."""
+    def motion_energy(extra):
         fl = FluidBody.block("water", (0.0, 0.0), (0.6, 0.15), 0.015, [Phase("water", 1000.0)])
         c0 = 10 * math.sqrt(2 * 9.81 * 0.15)
         y = fl.positions[:, 1]
@@ -46,11 +51,13 @@ def test_takes_energy_out_of_a_sloshing_tank():
         fl.velocity[:, 0] = 0.2 * np.cos(math.pi * fl.positions[:, 0] / 0.6)   # the first sloshing mode's flow
         walls = wall_box((0.0, 0.0), (0.6, 0.3), 0.015, layers=3)
         scene = Scene([fl, walls], [water(c0, spacing=0.015, extra=extra)], t_end=0.5)
-        return Simulation(scene).run(progress=False).timeseries["kinetic_energy"]
-    plain = run([])
-    sponged = run([SpongeZone(0.4, 0.15, 10.0)])
-    # measured at 0.5 s (under half a sloshing period): 0.037 J/m against 0.048 J/m without the zone
-    assert sponged[-1] < 0.9 * plain[-1]
+        ts = Simulation(scene).run(progress=False).timeseries
+        energy = (np.asarray(ts["kinetic_energy"]) + np.asarray(ts["potential_energy"])
+                  + np.asarray(ts["compression_energy"]))
+        return energy[-1] - (energy[0] - ts["kinetic_energy"][0])
+    plain = motion_energy([])
+    sponged = motion_energy([SpongeZone(0.4, 0.15, 10.0)])
+    assert 0.0 < sponged < 0.9 * plain
 
 
 def test_bad_zone_is_refused():

@@ -113,15 +113,16 @@ def test_a_coupling_names_the_solver_method_it_needs(monkeypatch):
 def plate_run():
     mod = load_problem("hydrostatic_plate")
     p = mod.Parameters(dx=0.05, t_end=0.26)   # past the two acoustic periods (0.255 s) the analysis waits for
-    res = Simulation(mod.make_scene(p)).run(progress=False, analyse=lambda r: mod.analyse(r, p))
-    return mod, p, res
+    sim = Simulation(mod.make_scene(p))
+    res = sim.run(progress=False, analyse=lambda r: mod.analyse(r, p))
+    return mod, p, res, sim.state.systems["fluid"]
 
 
 def test_plate_under_water_carries_the_water_and_deflects_as_the_plate_model(plate_run):
     """Coarse (20 particles across the 1 m plate), 0.26 s: after settling the plate carries the water's
     weight within 1 % and its mean mid-span deflection is within 2 % of the plate model's own
     static answer under the exact hydrostatic load (measured at dx 0.05 and 0.025: 0.2 %)."""
-    mod, p, res = plate_run
+    mod, p, res, _ = plate_run
     r = res.results
     assert res.summary["status"] == "completed"
     assert abs(r["water_load_mean_N_per_m"] / r["water_weight_N_per_m"] - 1.0) < 0.01
@@ -131,14 +132,22 @@ def test_plate_under_water_carries_the_water_and_deflects_as_the_plate_model(pla
 
 def test_fluid_and_plate_exchange_equal_and_opposite_loads(plate_run):
     """The load the plate receives is the reaction of the fluid's wall particles plus the contact
-    force: with the water at rest it balances the water's weight and the plate's weight is its
-    own (the fluid's Galerkin sums over all nodes add to zero)."""
-    mod, p, res = plate_run
+    force, and the fluid's last evaluation conserves momentum: its nodal forces over all fluid and
+    wall nodes add up to the water's weight (the Galerkin sums add to zero; the linear consistency
+    gives that up by its integration residual, measured 0.05 % of the weight). The water is not
+    at rest at one instant (at the recommended α = 0.02 it still rings acoustically: the plate's
+    last load is 3 % above the weight); its mean load is held to the weight in the test above."""
+    mod, p, res, fluid = plate_run
     summary = res.summary["interactions"]["coupling"]
     load = np.array(summary["last_wall_reaction_N"]) + np.array(summary["last_contact_force_N"])
     weight = p.rho * p.g * p.depth * p.length
     assert abs(load[0]) < 1e-6 * weight
-    assert load[1] == pytest.approx(-weight, rel=0.02)
+    on_plate_walls = fluid.force[fluid.bodies["plate_walls"]].sum(axis=0)
+    np.testing.assert_allclose(summary["last_wall_reaction_N"], on_plate_walls, rtol=1e-9, atol=1e-9 * weight)
+    gravity = -p.g * fluid.M[fluid.fluid].sum()
+    total = fluid.force.sum(axis=0)
+    assert abs(total[0]) < 1e-9 * weight
+    assert abs(total[1] - gravity) < 0.005 * weight
 
 
 def test_aitken_relaxation_finds_the_fixed_point_of_a_linear_interface_map():
