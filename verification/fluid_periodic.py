@@ -1,7 +1,7 @@
-"""Periodic flows: the Taylor–Green vortex at Re = 100, plane Poiseuille and Couette flow, at two resolutions.
+"""Periodic flows: the Taylor–Green vortex at Re = 100 (three resolutions), plane Poiseuille and Couette flow (two each).
 
 Runs ``problems/taylor_green.py`` (doubly periodic box), ``problems/poiseuille.py`` and
-``problems/couette.py`` (channels periodic along x between no-slip walls) at two particle
+``problems/couette.py`` (channels periodic along x between no-slip walls) at two or three particle
 spacings each, with the problems' scheme
 settings (``--set NAME=VALUE`` changes one for every run, e.g. ``--set alpha=0.02``), and records
 the error *and* the wall time of every run:
