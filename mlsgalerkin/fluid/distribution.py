@@ -8,7 +8,12 @@ measure of the union of the cells with the gaps narrower than :data:`CLOSED_GAP`
 .. math:: V_\text{geo} = \bigl|\,\operatorname{close}_{g}\bigl(\textstyle\bigcup_i C_i\bigr)\bigr|,
 
 evaluated on a grid of pixels (voxels) of side :math:`\Delta x/k` (:data:`PIXELS_PER_SPACING`):
-a pixel belongs to a cell when its centre does; the closing is a maximum filter then a minimum
+a pixel belongs to a cell when its centre does. The grid is laid on the particles' lattice: along
+each axis its pixel edges sit at the circular mean of the cell faces' phases
+:math:`(x_{i,a} - \tfrac12\Delta x)/(\Delta x/k) \bmod 1` (:func:`grid_lower_corner`), so the
+flat boundary of a fluid resting against a wall lies on pixel edges, not on a row of pixel
+centres where a 10⁻⁹ m wobble of the particles flips the whole row in or out (a tank 84 cells long
+read 1.1 % less volume for one sample when the grid followed one stray particle instead); the closing is a maximum filter then a minimum
 filter over a box of :math:`2r + 1` pixels, :math:`r = \lceil g k / 2 \rceil` (it fills every
 gap up to :math:`2r` pixels wide and leaves convex shapes as they were). It compares with the
 volume the particles' masses and densities say, :math:`\sum_f M_f/\rho_f`; their ratio minus one
@@ -18,9 +23,8 @@ collapsing column) reads a negative error, one that opens voids a positive one.
 Measured (``tests/test_fluid_distribution.py``): a lattice block gives :math:`N\Delta x^d`
 exactly (its union is a box whose sides are whole numbers of pixels); a lattice jittered by
 ±0.2 Δx within 1 % (the closing fills the cracks between the cells, up to 0.4 Δx wide; over 60
-seeds the mean error is below 0.05 %, its standard deviation 0.19 % for 800 particles in 2D,
-0.25 % for 1800 and 0.09 % for 8000 in 3D — the pixel sampling of the ragged boundary —, the
-largest 0.63 %); a
+seeds the mean error is below 0.05 %, its standard deviation 0.17 % for 800 particles in 2D and
+0.20 % for 1800 in 3D — the pixel sampling of the ragged boundary —, the largest 0.55 %); a
 block of 60 particles along one axis compressed by 10 % along it reads 9.75 % less (its outer
 half cells keep their size: :math:`(0.9 \cdot 59 + 1)/60`, within one pixel); an isolated particle
 (a splash) its own cell exactly; a disc cut from a lattice its cells exactly (the closing leaves
@@ -62,6 +66,7 @@ __all__ = [
     "PIXELS_PER_SPACING",
     "PairStatistics",
     "geometric_volume",
+    "grid_lower_corner",
     "occupancy",
     "occupancy_reference",
     "pair_statistics",
@@ -103,6 +108,22 @@ def _rasterise(x, origin, pixel, half, shape, grid):
                     grid[i, j, k] = 1
 
 
+def grid_lower_corner(x: NDArray[np.float64], spacing: float, pixel: float) -> NDArray[np.float64]:
+    """The lower corner ``(d,)`` (m) of the pixel grid (without its padding) over the cells of
+    side ``spacing`` (m) around ``x (n, d)``: at most one ``pixel`` (m) below the lowest cell face
+    along each axis, at the circular mean phase of the cell faces ``(x_a − spacing/2) / pixel mod 1``
+    (module docstring). Without a mean phase (faces spread evenly) the lowest face itself."""
+    faces = x - 0.5 * spacing
+    low = faces.min(axis=0)
+    angle = 2.0 * np.pi * ((faces - low) / pixel)
+    mean = np.stack([np.cos(angle).sum(axis=0), np.sin(angle).sum(axis=0)])
+    phase = np.where(np.hypot(mean[0], mean[1]) > 1e-9 * x.shape[0],
+                     np.mod(np.arctan2(mean[1], mean[0]) / (2.0 * np.pi), 1.0), 0.0)
+    shift = np.where(phase > 0.0, phase - 1.0, 0.0)   # in (−1, 0]: the corner stays below every face
+    return low + shift * pixel
+
+
+
 def occupancy(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = PIXELS_PER_SPACING,
               closed_gap: float = CLOSED_GAP) -> tuple[NDArray[np.uint8], float]:
     """The closed union of the particles' cells on a pixel grid: ``(grid, pixel)`` with ``grid``
@@ -112,11 +133,11 @@ def occupancy(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = 
     n, dim = x.shape
     k = int(pixels_per_spacing)
     r = max(1, math.ceil(closed_gap * k / 2))
-    lo = x.min(axis=0) - 0.5 * spacing
     hi = x.max(axis=0) + 0.5 * spacing
     while True:
         pixel = spacing / k
         pad = r + 1
+        lo = grid_lower_corner(x, spacing, pixel)
         shape = [int(math.ceil((hi[a] - lo[a]) / pixel)) + 2 * pad for a in range(dim)]
         if k <= 2 or math.prod(shape) <= MAX_PIXELS:
             break
@@ -144,7 +165,7 @@ def occupancy_reference(x: NDArray[np.float64], spacing: float, pixels_per_spaci
     r = max(1, math.ceil(closed_gap * k / 2))
     pixel = spacing / k
     pad = r + 1
-    lo = x.min(axis=0) - 0.5 * spacing
+    lo = grid_lower_corner(x, spacing, pixel)
     hi = x.max(axis=0) + 0.5 * spacing
     shape = [int(math.ceil((hi[a] - lo[a]) / pixel)) + 2 * pad for a in range(dim)]
     centres = np.meshgrid(*[lo[a] - pad * pixel + (np.arange(shape[a]) + 0.5) * pixel for a in range(dim)],
