@@ -8,12 +8,12 @@ measure of the union of the cells with the gaps narrower than :data:`CLOSED_GAP`
 .. math:: V_\text{geo} = \bigl|\,\operatorname{close}_{g}\bigl(\textstyle\bigcup_i C_i\bigr)\bigr|,
 
 evaluated on a grid of pixels (voxels) of side :math:`\Delta x/k` (:data:`PIXELS_PER_SPACING`):
-a pixel belongs to a cell when its centre does. The grid is laid on the particles' lattice: along
-each axis its pixel edges sit at the circular mean of the cell faces' phases
-:math:`(x_{i,a} - \tfrac12\Delta x)/(\Delta x/k) \bmod 1` (:func:`grid_lower_corner`), so the
-flat boundary of a fluid resting against a wall lies on pixel edges, not on a row of pixel
-centres where a 10⁻⁹ m wobble of the particles flips the whole row in or out (a tank 84 cells long
-read 1.1 % less volume for one sample when the grid followed one stray particle instead); the closing is a maximum filter then a minimum
+a pixel belongs to a cell when its centre does. Along each axis the pixel edges sit at the
+circular mean phase of the lower cell faces within half a spacing of the lowest one
+(:func:`grid_lower_corner`): the flat boundary of a fluid on a floor or against a side wall lies
+on pixel edges, and on a lattice so do the others, not on a row of pixel centres where a 10⁻⁹ m
+wobble of the particles flips the whole row in or out (a tank 84 cells long read 1.1 % less
+volume for one sample when the grid followed one stray particle 0.5 mm below the floor row); the closing is a maximum filter then a minimum
 filter over a box of :math:`2r + 1` pixels, :math:`r = \lceil g k / 2 \rceil` (it fills every
 gap up to :math:`2r` pixels wide and leaves convex shapes as they were). It compares with the
 volume the particles' masses and densities say, :math:`\sum_f M_f/\rho_f`; their ratio minus one
@@ -111,17 +111,20 @@ def _rasterise(x, origin, pixel, half, shape, grid):
 def grid_lower_corner(x: NDArray[np.float64], spacing: float, pixel: float) -> NDArray[np.float64]:
     """The lower corner ``(d,)`` (m) of the pixel grid (without its padding) over the cells of
     side ``spacing`` (m) around ``x (n, d)``: at most one ``pixel`` (m) below the lowest cell face
-    along each axis, at the circular mean phase of the cell faces ``(x_a − spacing/2) / pixel mod 1``
-    (module docstring). Without a mean phase (faces spread evenly) the lowest face itself."""
-    faces = x - 0.5 * spacing
-    low = faces.min(axis=0)
-    angle = 2.0 * np.pi * ((faces - low) / pixel)
-    mean = np.stack([np.cos(angle).sum(axis=0), np.sin(angle).sum(axis=0)])
-    phase = np.where(np.hypot(mean[0], mean[1]) > 1e-9 * x.shape[0],
-                     np.mod(np.arctan2(mean[1], mean[0]) / (2.0 * np.pi), 1.0), 0.0)
-    shift = np.where(phase > 0.0, phase - 1.0, 0.0)   # in (−1, 0]: the corner stays below every face
-    return low + shift * pixel
-
+    along each axis, with the pixel edges at the circular mean phase (``face / pixel mod 1``) of
+    the lower cell faces within half a spacing of the lowest one — the particles along a floor or
+    a side wall, not one stray particle (module docstring)."""
+    lower = x - 0.5 * spacing
+    low = lower.min(axis=0)
+    corner = low.copy()
+    for a in range(x.shape[1]):
+        faces = lower[lower[:, a] <= low[a] + 0.5 * spacing, a]
+        angle = 2.0 * np.pi * (faces - low[a]) / pixel
+        c, s = np.cos(angle).sum(), np.sin(angle).sum()
+        if math.hypot(c, s) > 1e-9 * faces.size:
+            phase = (math.atan2(s, c) / (2.0 * np.pi)) % 1.0
+            corner[a] = low[a] + (phase - 1.0 if phase > 0.0 else 0.0) * pixel   # stays below every face
+    return corner
 
 
 def occupancy(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = PIXELS_PER_SPACING,
