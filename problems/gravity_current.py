@@ -47,8 +47,12 @@ rows (Froude number 0.53 at 60 rows, ``mlsgalerkin run gravity_current --set dep
 rho_heavy=1100 --dx 0.002 --t-end 1.29``). At 60 rows the light current under the lid stalls
 (its front at 0.10 m/s, Froude number 0.29, where a symmetric exchange runs both fronts alike),
 the heavy current thins to 0.31 ``D`` and runs at Benjamin's speed for a current that thin
-(Froude number 0.52 for ``h = 0.3 D``): what holds the light fluid back at the lid — the
-no-slip lid, or the top row's pressure noise (median spread 5.6 ``Δρ g D``) — is not yet found.
+(Froude number 0.52 for ``h = 0.3 D``). It is not the no-slip lid: with free-slip walls
+(``--set slip=free_slip``) the light front runs at Froude number 0.38 against the heavy one's
+0.49 (+22.3 %), the heavy current as thin (0.30 ``D``). A non-Boussinesq exchange would do the
+opposite (the light current faster and thinner); what makes the heavy current thin at fine
+resolution is not yet found (the top row's pressure noise under the lid, median spread 5.6
+``Δρ g D``, is the next suspect).
 The default case runs −5.0 % (−0.6 % at 4 mm, +3.9 % at 2 mm).
 The largest geometric-volume error is 0.1–0.7 % (1.1 % at 13 rows). Pressure noise under
 the lid: the probes ``top_pressure_spread`` (max − min of the top row's pressure) and
