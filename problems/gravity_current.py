@@ -50,9 +50,13 @@ the heavy current thins to 0.31 ``D`` and runs at Benjamin's speed for a current
 (Froude number 0.52 for ``h = 0.3 D``). It is not the no-slip lid: with free-slip walls
 (``--set slip=free_slip``) the light front runs at Froude number 0.38 against the heavy one's
 0.49 (+22.3 %), the heavy current as thin (0.30 ``D``). A non-Boussinesq exchange would do the
-opposite (the light current faster and thinner); what makes the heavy current thin at fine
-resolution is not yet found (the top row's pressure noise under the lid, median spread 5.6
-``Δρ g D``, is the next suspect).
+opposite (the light current faster and thinner). It is the lid: at 40 rows to 1 s, with the lid
+the fronts run at Froude numbers 0.30 (light) and 0.46 (heavy), the heavy current 0.32 ``D``
+deep; without ``ClosedVolume`` 0.35 and 0.50 (+26.5 %); with a free surface (``--set lid=false``)
+0.44 and 0.42, the heavy current 0.44 ``D`` deep and the head +5.0 %. How the lid's wall
+particles hold the light current back (the top row's pressure spread is 5.6 ``Δρ g D``) is not
+yet found; at this density ratio the free surface barely moves, so ``lid=false`` is the
+configuration that converges here.
 The default case runs −5.0 % (−0.6 % at 4 mm, +3.9 % at 2 mm).
 The largest geometric-volume error is 0.1–0.7 % (1.1 % at 13 rows). Pressure noise under
 the lid: the probes ``top_pressure_spread`` (max − min of the top row's pressure) and
