@@ -23,8 +23,8 @@ collapsing column) reads a negative error, one that opens voids a positive one.
 Measured (``tests/test_fluid_distribution.py``): a lattice block gives :math:`N\Delta x^d`
 exactly (its union is a box whose sides are whole numbers of pixels); a lattice jittered by
 ±0.2 Δx within 1 % (the closing fills the cracks between the cells, up to 0.4 Δx wide; over 60
-seeds the mean error is below 0.05 %, its standard deviation 0.17 % for 800 particles in 2D and
-0.20 % for 1800 in 3D — the pixel sampling of the ragged boundary —, the largest 0.55 %); a
+seeds the mean error is below 0.05 %, its standard deviation 0.18 % for 800 particles in 2D and
+0.20 % for 1800 in 3D — the pixel sampling of the ragged boundary —, the largest 0.52 %); a
 block of 60 particles along one axis compressed by 10 % along it reads 9.75 % less (its outer
 half cells keep their size: :math:`(0.9 \cdot 59 + 1)/60`, within one pixel); an isolated particle
 (a splash) its own cell exactly; a disc cut from a lattice its cells exactly (the closing leaves
