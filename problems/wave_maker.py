@@ -58,6 +58,7 @@ from mlsgalerkin.fluid import (
 )
 from mlsgalerkin.fluid.eos import NEGATIVE_PRESSURE_MODES
 from mlsgalerkin.fluid.presets import RECOMMENDED
+from mlsgalerkin.fluid.sponge import SpongeZone
 from mlsgalerkin.motion import Oscillation
 from mlsgalerkin.problem import require, require_nonnegative, require_positive
 from mlsgalerkin.scene import Output, Probe, Scene
@@ -74,6 +75,8 @@ class Parameters:
     stroke: float = 0.02            #: paddle stroke S, peak to peak (m)
     probe_x: float = 0.4            #: position of the wave gauge from the paddle's mean position (m)
     tank_length: float = 4.0        #: distance from the paddle to the far wall (m)
+    sponge_length: float = 0.0      #: a damping zone before the far wall, this long; 0: none, the wall reflects (m)
+    sponge_rate: float = 10.0       #: the sponge's full damping rate sigma_max at the wall, times the period: sigma_max T (–)
     dx: float = 0.01                #: particle spacing (m)
     t_end: float = 7.0              #: end time (s)
     ramp_periods: float = 2.0       #: paddle periods over which the paddle is switched on (–)
@@ -161,7 +164,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     u_max = 0.5 * p.stroke * 2 * math.pi / p.period / math.tanh(wave_number(p.period, d, p.g) * d)
     scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
                    density_filter=p.density_filter, negative_pressure=p.negative_pressure,
-                   linear_consistency=p.linear_consistency, spacing=p.dx, h_factor=p.h_factor)
+                   linear_consistency=p.linear_consistency, spacing=p.dx, h_factor=p.h_factor,
+                   extra=[sponge(p)] if p.sponge_length > 0 else [])
     return Scene(
         [water_body, tank, paddle], [scheme], t_end=p.t_end, name="wave_maker",
         output=Output(every=p.frame_every, probe_every=p.probe_every, gif=p.gif, png=p.gif, color_by="pressure"),
@@ -170,10 +174,20 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     )
 
 
+def sponge(p: Parameters) -> SpongeZone:
+    """The damping zone over the last ``sponge_length`` of the tank: the rate rises as ``ξ²`` from 0 at
+    ``tank_length − sponge_length`` to ``sponge_rate / period`` (1/s) at the far wall."""
+    return SpongeZone(p.tank_length - p.sponge_length, p.sponge_length, p.sponge_rate / p.period, name="sponge")
+
+
 def measurement_window(p: Parameters) -> tuple[float, float]:
-    """``(t_from, t_to)``: steady waves at the probe, before the far wall's reflection returns (s)."""
+    """``(t_from, t_to)``: steady waves at the probe (s), before the far wall's reflection returns;
+    with a sponge, to the end of the run (the sponge absorbs the wave; its residual reflection is
+    measured in ``verification/results/fluid_validation``)."""
     cg = group_velocity(p.period, p.depth, p.g)
     t_from = p.ramp_periods * p.period + p.probe_x / cg + p.period
+    if p.sponge_length > 0:
+        return t_from, p.t_end
     t_to = (2 * p.tank_length - p.probe_x) / cg - p.period
     return t_from, min(t_to, p.t_end)
 
@@ -194,7 +208,7 @@ def analyse(result, p: Parameters) -> dict:
     if t_to - t_from < 2 * p.period or np.count_nonzero(sel) < 20:
         cg = out["group_velocity_m_s"]
         reflection = (2 * p.tank_length - p.probe_x) / cg - p.period   # when the far wall's reflection returns
-        if reflection - t_from < 2 * p.period:
+        if p.sponge_length == 0 and reflection - t_from < 2 * p.period:
             why, run_to = (f"no steady window: the far wall's reflection reaches the probe at {reflection:.2f} s, less "
                            f"than two periods after the waves settle there ({t_from:.2f} s); lengthen the tank "
                            f"(tank_length) or move the probe (probe_x)"), None
@@ -206,17 +220,25 @@ def analyse(result, p: Parameters) -> dict:
         out["headline"] = f"wave height {text}"
         return out
     omega = 2 * math.pi / p.period
-    A = np.column_stack([np.ones(sel.sum()), np.cos(omega * t[sel]), np.sin(omega * t[sel]),
-                         np.cos(2 * omega * t[sel]), np.sin(2 * omega * t[sel])])
-    coef, *_ = np.linalg.lstsq(A, eta[sel], rcond=None)
+    coef, resid = harmonic_fit(t[sel], eta[sel], omega)
     H = 2.0 * math.hypot(coef[1], coef[2])
-    resid = eta[sel] - A @ coef
     out.update({
         "wave_height_m": H, "H_over_S": H / p.stroke, "relative_error": (H - H_theory) / H_theory,
         "mean_level_m": float(coef[0]), "second_harmonic_over_first": math.hypot(coef[3], coef[4]) / (0.5 * H),
         "fit_rms_residual_m": float(np.sqrt(np.mean(resid**2))),
         "crest_to_trough_m": float(eta[sel].max() - eta[sel].min()),
     })
+    if p.sponge_length > 0:
+        # the far wall's reflection (what is left of it after the sponge) reaches the probe at
+        # t_back; the height fitted after it against the height before it bounds the reflection
+        t_back = (2 * p.tank_length - p.probe_x) / out["group_velocity_m_s"]
+        before, after = sel & (t < t_back), sel & (t >= t_back + p.period)
+        out["reflection_arrives_s"] = t_back
+        if t_back - t_from >= 2 * p.period and t[after].size and t[after][-1] - t[after][0] >= 2 * p.period:
+            h_before = 2.0 * math.hypot(*harmonic_fit(t[before], eta[before], omega)[0][1:3])
+            h_after = 2.0 * math.hypot(*harmonic_fit(t[after], eta[after], omega)[0][1:3])
+            out.update({"wave_height_before_reflection_m": h_before, "wave_height_after_reflection_m": h_after,
+                        "height_change_after_reflection": h_after / h_before - 1.0})
     # the artificial viscosity acts as nu = alpha h c0 / 8; a progressive wave loses amplitude at the
     # rate 2 nu k^2 (Lamb 1932, §348), so between the paddle and the gauge it decays by about
     # 1 - exp(-2 nu k^2 x_p / c_g); the wave Reynolds number is omega / (nu k^2)
@@ -230,11 +252,21 @@ def analyse(result, p: Parameters) -> dict:
     return out
 
 
+def harmonic_fit(t: np.ndarray, eta: np.ndarray, omega: float) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares ``η ≈ c + a cos ωt + b sin ωt + a₂ cos 2ωt + b₂ sin 2ωt``: the coefficients
+    ``(c, a, b, a₂, b₂)`` (m) and the residuals (m) at the samples ``t`` (s)."""
+    A = np.column_stack([np.ones(t.size), np.cos(omega * t), np.sin(omega * t),
+                         np.cos(2 * omega * t), np.sin(2 * omega * t)])
+    coef, *_ = np.linalg.lstsq(A, eta, rcond=None)
+    return coef, eta - A @ coef
+
+
 def check(p: Parameters) -> list[str]:
     """Problems with the parameters (see ``mlsgalerkin.problem``)."""
     out = require_positive(p, "depth", "period", "tank_length", "dx", "t_end", "c0_factor", "h_factor", "g",
                            "probe_every", "frame_every")
-    out += require_nonnegative(p, "stroke", "ramp_periods", "alpha", "delta", "density_filter")
+    out += require_nonnegative(p, "stroke", "ramp_periods", "alpha", "delta", "density_filter", "sponge_length")
+    out += require_positive(p, "sponge_rate")
     out += require(p.shifting in SHIFTING_MODES,
                    f"shifting = {p.shifting!r}: choose one of {', '.join(SHIFTING_MODES)}")
     out += require(p.negative_pressure in NEGATIVE_PRESSURE_MODES,
@@ -246,4 +278,8 @@ def check(p: Parameters) -> list[str]:
         out += require(p.depth >= 4 * p.dx, f"dx = {p.dx:g} m leaves fewer than 4 particle rows in the {p.depth:g} m "
                                             f"depth; choose dx <= {p.depth / 4:g} m")
         out += require(p.tank_length >= 2 * p.depth, f"the tank ({p.tank_length:g} m) must be at least two depths long")
+        out += require(p.sponge_length == 0 or p.probe_x < p.tank_length - p.sponge_length,
+                       f"the probe (x = {p.probe_x:g} m) stands inside the sponge, which starts at "
+                       f"{p.tank_length - p.sponge_length:g} m: the flow there is damped, not physical; shorten "
+                       f"sponge_length or move probe_x towards the paddle")
     return out

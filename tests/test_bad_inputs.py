@@ -126,6 +126,8 @@ CLI_CASES = [
     ("probe outside the tank", ["wave_maker", "--set", "probe_x=5"], "inside the tank"),
     ("zero period", ["wave_maker", "--set", "period=0"], "parameter period"),
     ("tank too short for waves", ["wave_maker", "--set", "tank_length=0.1"], "two depths long"),
+    ("wave gauge inside the sponge", ["wave_maker", "--set", "sponge_length=3.8"], "stands inside the sponge"),
+    ("sponge without damping", ["wave_maker", "--set", "sponge_length=1", "--set", "sponge_rate=0"], "sponge_rate"),
     ("hydrostatic tank too narrow", ["hydrostatic", "--set", "width=0.01"], "fewer than 4 particles"),
     ("unknown wall condition", ["hydrostatic", "--set", "slip=slippery"], "slip must be"),
     ("negative depth", ["hydrostatic", "--set", "depth=-0.4"], "parameter depth"),

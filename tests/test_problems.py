@@ -138,3 +138,29 @@ def test_python_dash_m_and_version():
     done = subprocess.run([sys.executable, "-m", "mlsgalerkin", "problems"], capture_output=True, text=True,
                           timeout=120)
     assert done.returncode == 0 and "wave_maker" in done.stdout and "my_case.py" in done.stdout
+
+
+def test_gravity_current_measures_both_fronts_over_the_heavy_heads_window():
+    """The light front is fitted over the heavy head's window: a synthetic exchange whose light
+    front runs at half the head's speed reads a ratio of 0.5 and the light Froude number half the
+    head's; with no light-front column (a run from before it was probed) nothing is reported."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from mlsgalerkin.problems import gravity_current as gc
+
+    p = gc.Parameters(depth=0.12, rho_heavy=1100.0)
+    length, _ = gc.tank(p)
+    lock = 0.5 * length
+    t = np.linspace(0.0, 1.5, 751)
+    head = lock - 0.15 * t
+    light = lock + 0.075 * t
+    res = gc.analyse(SimpleNamespace(timeseries={"time": t, "head_x": head, "light_front_x": light}), p)
+    assert res["head_speed_m_s"] == pytest.approx(0.15)
+    assert res["light_front_speed_m_s"] == pytest.approx(0.075)
+    assert res["front_speed_ratio"] == pytest.approx(0.5)
+    assert res["light_froude_number"] == pytest.approx(0.5 * res["froude_number"])
+    assert "light front" in res["headline"]
+    old = gc.analyse(SimpleNamespace(timeseries={"time": t, "head_x": head}), p)
+    assert "front_speed_ratio" not in old and old["head_speed_m_s"] == pytest.approx(0.15)
