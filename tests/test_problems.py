@@ -146,8 +146,6 @@ def test_gravity_current_measures_both_fronts_over_the_heavy_heads_window():
     head's; with no light-front column (a run from before it was probed) nothing is reported."""
     from types import SimpleNamespace
 
-    import numpy as np
-
     from mlsgalerkin.problems import gravity_current as gc
 
     p = gc.Parameters(depth=0.12, rho_heavy=1100.0)

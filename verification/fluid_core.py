@@ -96,6 +96,8 @@ def gravity_lid_cases(quick: bool) -> list[tuple[str, dict]]:
         ("lid, 40 rows, direct nodal integration", dict(base, dx=rows[40], t_end=1.15, linear_consistency=False)),
         ("lid, 40 rows, no shifting", dict(base, dx=rows[40], t_end=1.15, shifting="off")),
         ("lid, 40 rows, lid pressure 0.2 rho_heavy g D", dict(base, dx=rows[40], t_end=1.15, lid_pressure_factor=0.2)),
+        ("lid, 40 rows, alpha=0.02", dict(base, dx=rows[40], t_end=1.15, alpha=0.02)),
+        ("lid, 40 rows, delta=0.05", dict(base, dx=rows[40], t_end=1.15, delta=0.05)),
         ("lid, 40 rows, no density diffusion", dict(base, dx=rows[40], t_end=1.15, delta=0.0)),
         ("lid, 60 rows, no density diffusion", dict(base, dx=rows[60], t_end=1.15, delta=0.0)),
         ("free surface, 40 rows", dict(base, dx=rows[40], t_end=1.15, lid=False)),
