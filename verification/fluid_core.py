@@ -366,6 +366,37 @@ set with alpha = 0.01, no-slip walls, the lid with ClosedVolume) except the one 
                  "froude_number", "light_front_speed_m_s", "light_froude_number", "front_speed_ratio",
                  "largest_volume_error", "max_clumped_pairs", "top_pressure_spread_median_over_drho_g_d",
                  "max_penetration_dx", "wall_time_s", "wall_s_per_simulated_s"])
+    plot_gravity_lid(out, rows)
+
+
+def plot_gravity_lid(out: Path, rows: list[dict]) -> None:
+    """``gravity_lid.png``: each case's two Froude numbers (heavy head, light front) side by side,
+    with Benjamin's energy-conserving 0.5 and the formula's 0.4 marked."""
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    done = [r for r in rows if isinstance(r.get("light_froude_number"), float)]
+    if not done:
+        return
+    y = np.arange(len(done))[::-1]
+    fig, ax = plt.subplots(figsize=(8, 0.42 * len(done) + 1.8))
+    ax.barh(y + 0.2, [r["froude_number"] for r in done], 0.4, label="heavy head (floor)", color="tab:red")
+    ax.barh(y - 0.2, [r["light_froude_number"] for r in done], 0.4, label="light front (top)", color="tab:blue")
+    ax.axvline(0.5, color="k", lw=0.8, ls="--", label="energy-conserving 0.5")
+    ax.axvline(0.4, color="0.5", lw=0.8, ls=":", label="0.4 (Rottman & Simpson 1983)")
+    ax.set_yticks(y, [r["case"] for r in done], fontsize=8)
+    ax.set_xlabel("front speed / sqrt(g D drho/rho0)")
+    ax.set_title("D = 0.12 m lock exchange: both fronts (a Boussinesq exchange runs them alike)", fontsize=9)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    plt.close(fig)
+    atomic_write(out / "gravity_lid.png", buf.getvalue())
 
 
 def section_rest(args, out: Path, runs: Path) -> None:
