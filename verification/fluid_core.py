@@ -361,7 +361,9 @@ time window: froude_number and light_froude_number are both fronts' speeds over 
 drho/rho0); front_speed_ratio = light / heavy. A Boussinesq exchange under a lid runs both fronts
 alike (ratio 1, Froude number about 0.5 at high Reynolds number, a few per cent less with
 mixing: Shin, Dalziel & Linden 2004). Every setting is the problem's default (the recommended
-set with alpha = 0.01, no-slip walls, the lid with ClosedVolume) except the one named.""",
+set with alpha = 0.01, no-slip walls, the lid with ClosedVolume) except the one named.
+
+![both fronts per case](gravity_lid.png)""",
                 ["case", "status", "fluid_particles", "steps", "t_reached_s", "head_speed_m_s", "relative_error",
                  "froude_number", "light_front_speed_m_s", "light_froude_number", "front_speed_ratio",
                  "largest_volume_error", "max_clumped_pairs", "top_pressure_spread_median_over_drho_g_d",
