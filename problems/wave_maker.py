@@ -192,8 +192,8 @@ def sponge(p: Parameters) -> SpongeZone:
 
 def measurement_window(p: Parameters) -> tuple[float, float]:
     """``(t_from, t_to)``: steady waves at the probe (s), before the far wall's reflection returns;
-    with a sponge, to the end of the run (the sponge absorbs the wave; its residual reflection is
-    measured in ``verification/results/fluid_validation``)."""
+    with a sponge, to the end of the run (``analyse`` then reports the height before and after
+    the sponge's residual reflection returns; the module docstring says how much it leaves)."""
     cg = group_velocity(p.period, p.depth, p.g)
     t_from = p.ramp_periods * p.period + p.probe_x / cg + p.period
     if p.sponge_length > 0:

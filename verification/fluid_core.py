@@ -374,18 +374,18 @@ set with alpha = 0.01, no-slip walls, the lid with ClosedVolume) except the one 
 def plot_gravity_lid(out: Path, rows: list[dict]) -> None:
     """``gravity_lid.png``: each case's two Froude numbers (heavy head, light front) side by side,
     with Benjamin's energy-conserving 0.5 and the formula's 0.4 marked."""
-    import io
-
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from mlsgalerkin.plots.frames import figure_png
+
     done = [r for r in rows if isinstance(r.get("light_froude_number"), float)]
     if not done:
         return
     y = np.arange(len(done))[::-1]
-    fig, ax = plt.subplots(figsize=(8, 0.42 * len(done) + 1.8))
+    fig, ax = plt.subplots(figsize=(8, 0.42 * len(done) + 1.8), dpi=100)
     ax.barh(y + 0.2, [r["froude_number"] for r in done], 0.4, label="heavy head (floor)", color="tab:red")
     ax.barh(y - 0.2, [r["light_froude_number"] for r in done], 0.4, label="light front (top)", color="tab:blue")
     ax.axvline(0.5, color="k", lw=0.8, ls="--", label="energy-conserving 0.5")
@@ -395,10 +395,8 @@ def plot_gravity_lid(out: Path, rows: list[dict]) -> None:
     ax.set_title("D = 0.12 m lock exchange: both fronts (a Boussinesq exchange runs them alike)", fontsize=9)
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2)
     fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
+    figure_png(fig, out / "gravity_lid.png")
     plt.close(fig)
-    atomic_write(out / "gravity_lid.png", buf.getvalue())
 
 
 def section_rest(args, out: Path, runs: Path) -> None:
