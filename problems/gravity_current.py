@@ -67,7 +67,9 @@ under 0.5 at high Reynolds numbers (here ``v_h D/ν ≈ 2·10⁴``), so as the n
 falls the head leaves the 10 % band around Rottman & Simpson's 0.4 from above, in either
 configuration.
 The default case runs −5.0 % (−0.6 % at 4 mm, +3.9 % at 2 mm).
-The largest geometric-volume error is 0.1–0.7 % (1.1 % at 13 rows). Pressure noise under
+The largest geometric-volume error is 0.1–0.7 % (1.1 % at 13 rows) under the lid. With a free
+surface the deep case does not keep its volume: 3.5 and 4.9 % at 40 and 60 rows, 6.9 % at
+``Δρ/ρ0 = 0.03`` (``gravity_lid.md``); the run warns past 1 %. Pressure noise under
 the lid: the probes ``top_pressure_spread`` (max − min of the top row's pressure) and
 ``top_pressure_mean``, reported by ``analyse`` after 0.2 s.
 
