@@ -218,3 +218,62 @@ def test_empty_table_rows_and_self_pairs_only():
     table = NeighborTable(np.array([0, 1, 2], dtype=np.int64), np.array([0, 1], dtype=np.int32), 2)
     for method in METHODS:
         assert detect_free_surface(x, table, 1.0, method=method).all()
+
+
+# --------------------------------------------------------------------------------------
+# the normal-cone scan (Marrone et al. 2010's confirmation step)
+# --------------------------------------------------------------------------------------
+
+
+def test_cone_scan_keeps_the_top_row_and_covers_the_interior():
+    from mlsgalerkin.fluid.free_surface import open_along_normal
+    x, _ = _block(8)
+    table = _table(x, radius=2.6)
+    up = np.tile([0.0, 1.0], (x.shape[0], 1))
+    is_open = open_along_normal(x, table, np.arange(x.shape[0]), up)
+    top = np.isclose(x[:, 1], x[:, 1].max())
+    assert np.array_equal(is_open, top)
+    # pointing sideways, only the column on that side is open
+    right = np.tile([1.0, 0.0], (x.shape[0], 1))
+    assert np.array_equal(open_along_normal(x, table, np.arange(x.shape[0]), right), np.isclose(x[:, 0], x[:, 0].max()))
+
+
+def test_cone_scan_covers_a_sparse_patch_inside_a_disordered_block():
+    # an interior particle next to a removed neighbour has a deficient neighbourhood but
+    # particles in every direction: whatever its normal, the cone is covered
+    from mlsgalerkin.fluid.free_surface import open_along_normal
+    x, _ = _block(9)
+    centre = np.argmin(np.linalg.norm(x - x.mean(0), axis=1))
+    hole = np.argmin(np.linalg.norm(x - (x[centre] + [1.0, 0.0]), axis=1))
+    x = np.delete(x, hole, axis=0)
+    centre -= int(hole < centre)
+    table = _table(x, radius=2.6)
+    angles = np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
+    normals = np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    assert not open_along_normal(x, table, np.full(16, centre), normals).any()
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_cone_scan_numba_matches_reference(seed):
+    from mlsgalerkin.fluid.free_surface import open_along_normal, open_along_normal_reference
+    rng = np.random.default_rng(seed)
+    x, _ = _block(10)
+    x += rng.uniform(-0.3, 0.3, x.shape)
+    period = np.array([10.0, 0.0])
+    x[:, 0] = np.mod(x[:, 0], 10.0)        # ten columns, seamless across x = 0
+    table = find_neighbors(x, x, radius=2.6, period=period)
+    cand = rng.permutation(x.shape[0])
+    # normals roughly away from the nearer of the top and bottom rows: those rows are open
+    n = np.sign(x[cand, 1:2] - 4.5) * [0.0, 1.0] + 0.3 * rng.normal(size=(cand.size, 2))
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    for angle in (np.pi / 4, np.pi / 3):
+        a = open_along_normal(x, table, cand, n, angle, period)
+        b = open_along_normal_reference(x, table, cand, n, angle, period)
+        assert np.array_equal(a, b) and 5 < a.sum() < 40
+
+
+def test_cone_scan_refuses_a_bad_angle():
+    from mlsgalerkin.fluid.free_surface import open_along_normal
+    x, _ = _block(3)
+    with pytest.raises(ValueError, match="half_angle"):
+        open_along_normal(x, _table(x), [0], [[0.0, 1.0]], half_angle=2.0)
