@@ -28,50 +28,50 @@ Stabilisation: the recommended set (``mlsgalerkin.fluid.RECOMMENDED``: δ-SPH de
 within each phase, local shifting, the pressure's linear fit integrated exactly) except a lower
 Monaghan ``α = 0.01``, plus the tank's penalty surface. The head is slow: its numerical Reynolds
 number ``v_h D/ν`` with ``ν = α h c0/8`` is about 170 at the recommended ``α = 0.02`` at 20 rows
-(reported in ``summary.json``), and there the head runs up to 13 % slow where ``α = 0.01`` gives
-−1 to −5 % (``D = 0.04`` and 0.06 m, ``Δρ/ρ0 = 0.5``): of the nine cases at 20 rows in the scaled
-tank 8 are within 10 % at ``α = 0.01``, 6 at ``α = 0.02``. Under the lid the pressure level is free (the fluid is closed in):
+(reported in ``summary.json``), and there the head runs 8–10 % slow where ``α = 0.01`` gives
+−5 to +4 % (``D = 0.04`` and 0.06 m, ``Δρ/ρ0 = 0.5``): of the nine cases at 20 rows in the scaled
+tank all 9 are within 10 % at ``α = 0.01``, 8 at ``α = 0.02`` (−10.04 % at ``D = 0.04`` m,
+``Δρ/ρ0 = 1``). Under the lid the pressure level is free (the fluid is closed in):
 the tank starts at ``lid_pressure_factor · ρ_heavy g D`` under the lid (default 1), and
 :class:`~mlsgalerkin.fluid.ClosedVolume` holds the closed tank's volume (``closed_volume``).
 Without it the collocated continuity equation lost about 1 % of the volume per second under the
 lid, the lid's pressure level ran out in about 0.8 s, and the top row went into tension and
 clumped (``lid_clumping.md``; ``docs/theory/stabilisation.md`` §9).
 
-Measured (``verification/results/fluid_core/gravity.md``; the 3 × 3 matrix of ``D`` = 0.04, 0.06,
-0.12 m and ``Δρ/ρ0`` = 0.1, 0.5, 1): every run completes; within 10 % of the formula are 8 of 9
-in the tank scaled with the depth at 20 rows (``D = 0.12`` m, ``Δρ/ρ0 = 0.1``: +12.3 %), 9 of 9
-in this 0.34 m tank at 20 rows (−8.6 to +6.2 %) and 6 of 9 at the default ``Δx = 3`` mm, which
-is 13 rows at ``D = 0.04`` m (−11.1 and −11.5 %) and 40 at 0.12 m (+13.9 % at ``Δρ/ρ0 = 0.1``).
-That deep weakly stratified case does not converge under the lid, and its exchange is lopsided
-at every resolution (``verification/results/fluid_core/gravity_lid.md``, ``python
-verification/fluid_core.py --section gravity_lid``; ``analyse`` reports both fronts:
+Measured (``verification/results/fluid_core/gravity.md``, 2026-12-02; the 3 × 3 matrix of ``D`` =
+0.04, 0.06, 0.12 m and ``Δρ/ρ0`` = 0.1, 0.5, 1): every run completes; within 10 % of the formula
+are 9 of 9 in the tank scaled with the depth at 20 rows (−9.2 to +7.1 %), 8 of 9 in this 0.34 m
+tank at 20 rows (``D = 0.04`` m, ``Δρ/ρ0 = 0.1``: +15.0 %) and 5 of 9 at the default ``Δx = 3``
+mm, which is 13 rows at ``D = 0.04`` m (−20.3, −14.1 and −12.6 %) and 40 at 0.12 m (+18.5 % at
+``Δρ/ρ0 = 0.1``). That deep weakly stratified case does not converge under the lid, and its
+exchange is lopsided at every resolution (``verification/results/fluid_core/gravity_lid.md``,
+``python verification/fluid_core.py --section gravity_lid``; ``analyse`` reports both fronts:
 ``light_froude_number`` and ``front_speed_ratio``, the light front's speed over the heavy head's,
-1 in a Boussinesq exchange under a lid). At 20, 40 and 60 rows the head runs −4.9, +13.9 and
-+39.1 % and the light front at 0.67, 0.64 and 0.61 of its speed: the light current under the lid
-stays thick and slow, the heavy one thins (0.3 ``D`` at 60 rows) and runs at Benjamin's speed for
-a current that thin (Froude number 0.52 for ``h = 0.3 D``). One setting changed at a time at 40
-rows: free-slip walls 0.92 (+25.1 %, both fronts near Benjamin's energy-conserving 0.5), no
-density diffusion 0.84 (+2.5 %; at 60 rows that run diverges at 0.93 s; ``δ = 0.05``: 0.69), a
-free surface 1.01 (+8.1 %); the penalty surface (0.60 without), the linear consistency (0.71
-without), the shifting (0.75 without), the lid's pressure level (0.71 at 0.2 ``ρ_heavy g D``) and
-``α = 0.02`` (0.66) do not remove it. At ``Δρ/ρ0 = 0.03`` the ratio is 0.34 under the lid
-(+47.7 %) and 0.57 with a free surface (+39.5 %): the error scales with ``g``, not ``g′``, and a
-free surface only hides it at ``Δρ/ρ0 = 0.1``. Its mechanism is not yet found; the lead is
-the melted lattice of the mixing zone: a two-layer tank at rest started that disordered
-(``stratified_rest --set jitter=0.25``) grows a flow of 77 % of ``sqrt(g' D)`` within 1 s that
-also scales with ``g`` and mixes the layers against gravity. At ``Δρ/ρ0 =
-0.1`` with a free surface the two fronts run alike (1.01 and 1.01 at 40 and 60 rows) and both
-approach the energy-conserving 0.5 (Froude numbers 0.43 and 0.47: +8.1 and +17.1 % against the
-formula's 0.4): Shin, Dalziel & Linden (2004) measure lock-exchange currents a few per cent
+1 in a Boussinesq exchange under a lid). At 20, 40 and 60 rows the head runs −6.9, +18.5 and
++30.2 % and the light front at 0.81, 0.68 and 0.59 of its speed. One setting changed at a time
+at 40 rows: free-slip walls 0.90 (+27.8 %), no shifting 0.79 (+3.5 %), a free surface 1.07
+(+3.3 %); the penalty surface (0.65 without), direct nodal integration (0.71), the lid's pressure
+level (0.70 at 0.2 ``ρ_heavy g D``), ``α = 0.02`` (0.67) and ``δ = 0.05`` (0.66) do not remove it;
+without density diffusion the run diverges (0.93 s; 0.83 s at 60 rows). At ``Δρ/ρ0 = 0.03`` the
+ratio is 0.32 under the lid (+46.6 %) and 0.57 with a free surface (+43.6 %). The mechanism
+(``docs/theory/stabilisation.md`` §7): the fronts' pressure leaves the linear consistency's
+linearity limit first, those nodes fall back to direct nodal integration, whose error on the
+disordered lattice of the mixing zone scales with the pressure itself (so with ``g``, not
+``g′``), and its noise trips their neighbours until no node is corrected (0.8 s at 20 rows).
+With the correction kept at every node the fronts run alike (0.97 at 20 rows; 0.98 and +1.8 %
+at 40 rows) but the geometric volume drifts (2.7 % at 40 rows) and an impact gains energy: the
+cure is a nodal integration that is linearly exact and conserves energy at once, not yet built.
+With a free surface at ``Δρ/ρ0 = 0.1`` the two fronts run alike (1.07 and 1.01 at 40 and 60 rows)
+and approach the energy-conserving 0.5 (Froude numbers 0.41 and 0.46: +3.3 and +15.1 % against
+the formula's 0.4): Shin, Dalziel & Linden (2004) measure lock-exchange currents a few per cent
 under 0.5 at high Reynolds numbers (here ``v_h D/ν ≈ 2·10⁴``), so as the numerical viscosity
 falls the head leaves the 10 % band around Rottman & Simpson's 0.4 from above, in either
-configuration.
-The default case runs −5.0 % (−0.6 % at 4 mm, +3.9 % at 2 mm).
-The largest geometric-volume error is 0.1–0.7 % (1.1 % at 13 rows) under the lid. With a free
-surface the deep case does not keep its volume: 3.5 and 4.9 % at 40 and 60 rows, 6.9 % at
-``Δρ/ρ0 = 0.03`` (``gravity_lid.md``); the run warns past 1 %. Pressure noise under
-the lid: the probes ``top_pressure_spread`` (max − min of the top row's pressure) and
-``top_pressure_mean``, reported by ``analyse`` after 0.2 s.
+configuration. The default case runs +3.7 % (``D = 0.06`` m, ``Δρ/ρ0 = 0.5`` at 3 mm = 20 rows).
+The largest geometric-volume error is 0.1–1.2 % under the lid. With a free surface the deep case
+does not keep its volume: 3.3 and 4.8 % at 40 and 60 rows, 6.9 % at ``Δρ/ρ0 = 0.03``
+(``gravity_lid.md``); the run warns past 1 %. Pressure noise under the lid: the probes
+``top_pressure_spread`` (max − min of the top row's pressure) and ``top_pressure_mean``, reported
+by ``analyse`` after 0.2 s.
 
 Why a lid: the formula comes from laboratory currents with ``Δρ/ρ0`` of a few per cent, whose
 free surface barely moves. At ``Δρ/ρ0 = 0.5`` an open surface does move: measured with
