@@ -377,9 +377,11 @@ def detect_neighbour_deficit(
 CONE_HALF_ANGLE = math.pi / 4
 
 
-@numba.njit(parallel=True, cache=True)
+@numba.njit(cache=True)
 def _open_cone_kernel(x, indptr, indices, candidates, normals, cos_cone, period, out):
-    for k in prange(candidates.shape[0]):
+    # serial: the candidates are the few particles with a deficient kernel sum, and a thread
+    # launch would cost more than the scan
+    for k in range(candidates.shape[0]):
         i = candidates[k]
         is_open = True
         for q in range(indptr[i], indptr[i + 1]):
@@ -421,12 +423,18 @@ def open_along_normal(positions: ArrayLike, neighbors: NeighborTable, candidates
     half_angle : the cone's half-angle (rad), in (0, π/2].
     period : (3,) float, the periodic lengths (m; 0 for none).
     """
-    x = as_coordinates("positions", positions)
-    cand = np.ascontiguousarray(candidates, dtype=np.int64)
+    # called on every force evaluation: shape checks only (a full finiteness check of every
+    # position would cost more than the scan)
+    x = np.ascontiguousarray(positions, dtype=np.float64)
+    if x.ndim != 2 or not 1 <= x.shape[1] <= 3:
+        raise ValueError(f"positions must have shape (n, d) with d = 1, 2 or 3, got {x.shape}")
+    cand = np.ascontiguousarray(candidates, dtype=np.int64).ravel()
     nrm = np.ascontiguousarray(normals, dtype=np.float64).reshape(cand.shape[0], x.shape[1])
     if not 0.0 < half_angle <= math.pi / 2:
         raise ValueError(f"half_angle must be in (0, pi/2] rad, got {half_angle!r}")
     out = np.empty(cand.shape[0], dtype=np.bool_)
+    if cand.shape[0] == 0:
+        return out
     _open_cone_kernel(x, np.ascontiguousarray(neighbors.indptr, dtype=np.int64), np.ascontiguousarray(neighbors.indices),
                       cand, nrm, math.cos(half_angle), as_period(period), out)
     return out
