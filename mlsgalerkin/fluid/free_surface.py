@@ -48,7 +48,8 @@ disordered fluid a particle next to a sparse patch has a kernel sum as low as a 
 (0.84 at ± 0.25 Δx of jitter against 0.76 on a lattice's top row). The candidate is on the
 surface when no neighbour lies in the cone of half-angle π/4 around its outward normal.
 
-The detectors are numba loops, parallel over particles, with numpy references
+The coverage and count detectors are numba loops parallel over particles, the cone scan a
+serial one (its candidates are few); each has a numpy reference
 (:func:`detect_circle_coverage_reference`, :func:`surface_indicators_reference`).
 
 Example

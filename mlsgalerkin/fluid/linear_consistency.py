@@ -1,5 +1,5 @@
 r"""Linearly consistent nodal integration of the pressure force, with the free-surface boundary
-term: the :class:`LinearConsistentPressure` effect (experimental, opt-in).
+term: the :class:`LinearConsistentPressure` effect (part of the recommended set, :data:`~mlsgalerkin.fluid.RECOMMENDED`).
 
 **Why.** Direct nodal integration (DNI) of the internal force,
 :math:`\mathbf f_i = \sum_k p_k\,\nabla N_i(\mathbf x_k)\,V_k`, integrates a *linear* pressure
@@ -38,7 +38,8 @@ under it) and whose outward cone holds no neighbour (Marrone et al. 2010's scan,
 a disordered fluid a particle next to a sparse patch has a Shepard sum as low as a surface's
 (0.84 at ± 0.25 Δx of jitter); taken for a surface particle it carried the pressure of its depth
 as a boundary load (5.7 ``g`` on an interior particle of the two-layer tank at rest, and a flow of
-77 % of :math:`\sqrt{g'D}` within 1 s), with the outward normal :math:`\mathbf n_s = -\sum_j V_j\nabla_s W_{sj}/|\cdot|` and
+77 % of :math:`\sqrt{g'D}` within 1 s), with the outward normal
+:math:`\mathbf n_s = -\sum_j V_j\nabla_s W_{sj}/|\cdot|` and
 :math:`p^h(\mathbf y_s) = a_s + \mathbf g_s\cdot(\mathbf y_s - \mathbf x_s)` the surface particle's
 pressure fit on its face; the shape functions on the face are those of the surface particle
 continued to first order, :math:`N_j(\mathbf y_s) \approx N_j(\mathbf x_s) + \nabla N_j(\mathbf x_s)\cdot(\mathbf y_s -
@@ -58,7 +59,8 @@ pressure over its support departs from the node's linear fit by more than
 ``linear_tol · |g_i| Δx`` (0.5): :math:`\max_j |p_j - a_i - \mathbf g_i\cdot(\mathbf x_j - \mathbf x_i)|`
 over the entries of its row with :math:`N_j(\mathbf x_i) \ne 0` (a row may list a wall particle
 outside its support, with ``p = 0`` when no fluid is in its reach; counted, it made a corner node of
-a disordered start fall back to DNI). Water at rest (a linear pressure) is corrected everywhere; an impact, a pressure
+a disordered start fall back to DNI). Water at rest (a linear pressure) is corrected everywhere;
+an impact, a pressure
 wave's crest or a flow whose pressure curves over a few spacings keeps DNI there.
 
 **What the switch costs in a flow** (open; measured in the deep weakly stratified lock exchange
@@ -68,7 +70,8 @@ jump at the release); those nodes fall back to DNI, whose error on a disordered 
 with the pressure itself (:math:`a_i\mathbf e_i`, about ``ρ g`` times the depth over the spacing
 times the disorder); the noise it makes trips the neighbours. The corrected share falls from 1
 at 0.07 s to 0.91 at 0.14 s and 0 at 0.8 s, the median departure grows from 3 Pa to 300 Pa,
-and the light front runs at 0.81 of the heavy head. Corrected everywhere (``linear_tol`` unbounded) the departure
+and the light front runs at 0.81 of the heavy head. Corrected everywhere (``linear_tol``
+unbounded) the departure
 stays at 3–8 Pa, the fronts run alike (0.97; 0.98 and head +1.8 % at 40 rows, where the default
 gives 0.68 and +18.5 %), but the geometric volume drifts (0.9 % and 2.7 %), the dam break with
 impact gains energy and a free surface diverges. Measured and rejected: ``linear_tol = 2`` or 5
@@ -322,8 +325,8 @@ def linear_consistency_force(s: FluidState, *, surface: float = 0.85, c_min: flo
 class LinearConsistentPressure(Effect):
     """Linearly consistent integration of the pressure force with the free-surface boundary term
     (module docstring): ``f_i += −a_i e_i − (D_i + w_i I) g_i + b_i`` at the fluid nodes with a
-    Shepard sum of at least ``c_min``; ``surface`` is the Shepard sum below which a particle's
-    outer face carries the boundary term. Experimental: not part of any default yet."""
+    Shepard sum of at least ``c_min``; ``surface`` is the Shepard sum below which a particle is a
+    surface candidate (confirmed by the normal-cone scan). Part of the recommended set."""
 
     name = "linear_consistent_pressure"
     stabilising = True
