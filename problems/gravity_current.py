@@ -60,7 +60,9 @@ disordered lattice of the mixing zone scales with the pressure itself (so with `
 ``g′``), and its noise trips their neighbours until no node is corrected (0.8 s at 20 rows).
 With the correction kept at every node the fronts run alike (0.97 at 20 rows; 0.98 and +1.8 %
 at 40 rows) but the geometric volume drifts (2.7 % at 40 rows) and an impact gains energy: the
-cure is a nodal integration that is linearly exact and conserves energy at once, not yet built.
+cure is a nodal integration that is linearly exact and conserves energy at once, not yet built
+(a prototype runs the fronts alike, 0.99 at 20 rows with the head at −7.3 %, but leaves the
+pairing modes of nodal integration unresisted: ``docs/theory/stabilisation.md`` §7).
 With a free surface at ``Δρ/ρ0 = 0.1`` the two fronts run alike (1.07 and 1.01 at 40 and 60 rows)
 and approach the energy-conserving 0.5 (Froude numbers 0.41 and 0.46: +3.3 and +15.1 % against
 the formula's 0.4): Shin, Dalziel & Linden (2004) measure lock-exchange currents a few per cent
