@@ -218,7 +218,7 @@ def write_table(out: Path, name: str, rows: list[dict], title: str, notes: str, 
         lines.append("| " + " | ".join(format_cell(r.get(k, "")) for k in keys) + " |")
     prov = provenance(f"{report}/{name}")
     lines += ["", "Produced by: `" + prov["command"] + "`, mlsgalerkin " + prov["mlsgalerkin_version"]
-              + f", commit {prov['git_commit']}, {prov['date_utc']}, {prov['machine']}."]
+              + f", commit {prov['git_commit']}, {prov['date_utc']}, {prov['machine']}, numba threads {prov['numba_threads']}."]
     atomic_write(out / f"{name}.md", "\n".join(lines) + "\n")
 
 

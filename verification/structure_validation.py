@@ -371,7 +371,7 @@ def gate_quasi_static(out: Path, rows: list[dict]) -> None:
                          f"{1e3 * sy:.1f} | {1e3 * ey[1]:.1f} |")
     prov = provenance(f"{REPORT}/gate_quasi_static")
     lines += ["", "Produced by: `" + prov["command"] + "`, mlsgalerkin " + prov["mlsgalerkin_version"]
-              + f", commit {prov['git_commit']}, {prov['date_utc']}, {prov['machine']}."]
+              + f", commit {prov['git_commit']}, {prov['date_utc']}, {prov['machine']}, numba threads {prov['numba_threads']}."]
     atomic_write(out / "gate_quasi_static.md", "\n".join(lines) + "\n")
 
 

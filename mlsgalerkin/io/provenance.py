@@ -62,7 +62,10 @@ def provenance(study: str, mode: str | None = None, extra: dict | None = None) -
     Keys, in order: ``study``, ``command`` (:func:`command_line`), ``mode`` (only when given),
     ``mlsgalerkin_version``, ``git_commit`` (:func:`git_commit`), ``date_utc`` (ISO 8601,
     seconds), ``machine`` (``platform``, ``processor``, ``cpu_count``), ``python``, ``numpy``,
-    ``numba``; then the items of ``extra`` (which may override any of them).
+    ``numba``, ``numba_threads`` (the compiled kernels' thread count: the parallel sums' order,
+    so the round-off, depends on it; in a chaotic flow two thread counts give visibly different
+    results, each bit-identical on repeat); then the items of ``extra`` (which may override any
+    of them).
     """
     import numba
 
@@ -84,6 +87,7 @@ def provenance(study: str, mode: str | None = None, extra: dict | None = None) -
             "python": platform.python_version(),
             "numpy": np.__version__,
             "numba": numba.__version__,
+            "numba_threads": numba.get_num_threads(),
         }
     )
     prov.update(extra or {})
