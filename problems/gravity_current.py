@@ -51,8 +51,9 @@ exchange is lopsided at every resolution (``verification/results/fluid_core/grav
 +30.2 % and the light front at 0.81, 0.68 and 0.59 of its speed (at 20 rows the round-off of
 the parallel sums alone moves the head by about ±1.5 %: −8.4 % on one numba thread, −6.0 % on
 two). One setting changed at a time at 40 rows: free-slip walls 0.90 (+27.8 %), no shifting
-0.79 (+3.5 %), a free surface 1.07 (+3.3 %); the penalty surface (0.65 without), direct nodal integration (0.71), the lid's pressure
-level (0.70 at 0.2 ``ρ_heavy g D``), ``α = 0.02`` (0.67) and ``δ = 0.05`` (0.66) do not remove it;
+0.79 (+3.5 %), a free surface 1.07 (+3.3 %); the penalty surface (0.65 without), direct nodal
+integration (0.71), the lid's pressure level (0.70 at 0.2 ``ρ_heavy g D``), ``α = 0.02`` (0.67) and
+``δ = 0.05`` (0.66) do not remove it;
 without density diffusion the run diverges (0.93 s; 0.83 s at 60 rows). At ``Δρ/ρ0 = 0.03`` the
 ratio is 0.32 under the lid (+46.6 %) and 0.57 with a free surface (+43.6 %). The mechanism
 (``docs/theory/stabilisation.md`` §7): the fronts' pressure leaves the linear consistency's
