@@ -11,15 +11,17 @@ allowed inside the liquid, and the density of the particles flagged as free surf
 at ``ρ0`` (``negative_pressure="free_surface"``: a surface against air carries no tension).
 Measured at the defaults (``verification/results/fluid_validation/summary.md``): at ``Δx`` = 2
 and 1 mm the drop reaches 0.16 s, the mass is exact, the energy never grows, and the largest
-geometric-volume error is 0.77 and 0.31 %. Measured at Δx = 1 mm with the set
-(``verification/results/fluid_core/drop.md``):
+geometric-volume error is 0.68 and 0.39 % (0.77 and 0.31 % before 2026-12-02). Measured at Δx = 1 mm with the set
+(``verification/results/fluid_core/drop.md``, regenerated 2026-12-02):
 
 - with this floor, 2, 5 and 10 m/s all reach their end (0.16, 0.064, 0.032 s), the energy never
   growing;
-- the floor on every particle (``"cavitate"``) also reaches the end at all three speeds (at
-  2 m/s one particle went 0.69 Δx into the wall layer, none through it);
-- with tension allowed everywhere, 2 m/s reaches its end, but 5 and 10 m/s diverge at 6.1 and
-  3.6 ms (at 42 and 7 ms with the former α = 0.05 and direct nodal integration): a particle of
+- the floor on every particle (``"cavitate"``) also reaches the end at all three speeds, but
+  at 2 m/s one splash particle crossed the side wall's particle layer at 0.135 s (2.8 Δx behind
+  its surface at y = 0.095 m; 0.69 Δx into the layer, none through it, before the linear
+  consistency's surface fix of 2026-12-02): the walls leak for that setting, not for the default;
+- with tension allowed everywhere, 2 m/s reaches its end, but 5 and 10 m/s diverge at 6.0 and
+  13.8 ms (at 42 and 7 ms with the former α = 0.05 and direct nodal integration): a particle of
   the thinning crown sheet falls below ``ρ/ρ0 = 0.5``. A surface against air needs the floor;
 - without density diffusion and shifting, with tension allowed, the crown sheet lost density
   until the watchdog stopped the run at 5–10 ms.
