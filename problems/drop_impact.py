@@ -11,8 +11,8 @@ allowed inside the liquid, and the density of the particles flagged as free surf
 at ``ρ0`` (``negative_pressure="free_surface"``: a surface against air carries no tension).
 Measured at the defaults (``verification/results/fluid_validation/summary.md``): at ``Δx`` = 2
 and 1 mm the drop reaches 0.16 s, the mass is exact, the energy never grows, and the largest
-geometric-volume error is 0.68 and 0.39 % (0.77 and 0.31 % before 2026-12-02). Measured at Δx = 1 mm with the set
-(``verification/results/fluid_core/drop.md``, regenerated 2026-12-02):
+geometric-volume error is 0.68 and 0.39 % (0.77 and 0.31 % before 2026-12-02). Measured at
+Δx = 1 mm with the set (``verification/results/fluid_core/drop.md``, regenerated 2026-12-02):
 
 - with this floor, 2, 5 and 10 m/s all reach their end (0.16, 0.064, 0.032 s), the energy never
   growing;
