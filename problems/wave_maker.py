@@ -40,13 +40,15 @@ Lamb 1932, so by about ``1 − exp(−2νk² x_p/c_g)`` between paddle and gauge
 ``viscous_decay_to_gauge``; the wave Reynolds number ``ω/(νk²)`` is reported too).
 Settings: the one recommended set (``mlsgalerkin.fluid.RECOMMENDED``: α = 0.02, density
 diffusion, shifting, the pressure's linear fit integrated exactly), tension released by
-cavitation. Measured at the defaults (``verification/results/fluid_validation/summary.md``):
-the wave height is 19.54 mm against 20.30 mm, −3.8 %, at 20 rows per depth (``Δx = 0.01`` m);
-at 10 rows −5.9 % (``verification/results/quiet_state/investigation.md`` §8); at 30 rows
-+7.2 %, outside the 5 %, with a second harmonic of 9 % of the first (6.8 % at 20 rows): with
-less numerical viscosity the finer wave is steeper than linear theory. The former set (α = 0.1,
-a Shepard filter, no density diffusion or shifting, direct nodal integration; α = 0.02 without
-the linear consistency let a lattice mode grow) gave −4.4 % and −2.5 % at 20 and 30 rows.
+cavitation. Measured at the defaults (``verification/results/fluid_validation/summary.md``,
+2026-12-02): the wave height is 19.92 mm against 20.30 mm, −1.9 %, at 20 rows per depth
+(``Δx = 0.01`` m) and 20.24 mm, −0.3 %, at 30 rows, both within 5 %, with a second harmonic of
+10.5 and 9.8 % of the first (wave Reynolds numbers 514 and 771). Before the linear consistency's
+surface fix of 2026-12-02 they were −3.8 and +7.2 % (the 30 rows outside the 5 %); at 10 rows
+−5.9 % (``verification/results/quiet_state/investigation.md`` §8, before the fix). The former set
+(α = 0.1, a Shepard filter, no density diffusion or shifting, direct nodal integration; α = 0.02
+without the linear consistency let a lattice mode grow) gives −4.3 % at 20 rows (Re 103; −2.5 %
+at 30 rows, measured before).
 """
 
 from __future__ import annotations
