@@ -25,13 +25,25 @@ reflection away from the probe until ``t ≈ (2 L − x_p)/c_g``. A shorter tank
 (``sponge_length`` > 0, off by default): a :class:`~mlsgalerkin.fluid.SpongeZone` over the tank's last
 ``sponge_length`` whose rate rises as ``ξ²`` to ``sponge_rate / T`` at the far wall; the fit window
 then runs to ``t_end`` and ``analyse`` compares the height before and after the far wall's damped
-reflection returns. It does not absorb well enough yet to replace the long tank. Measured at 10
-rows per depth in a 3 m tank against an 8 m tank without reflection over the same times (the RMS
-difference of ``η`` over half the reference height, in 3.4–6, 6–9 and 9–12 s): without a sponge
-0.28, 0.57, 0.76; with 1.2 m (one wavelength) at ``sponge_rate = 10`` 0.35, 0.24, 0.37 (the height
-in 9–12 s +35 % against +70 % without); at ``sponge_rate = 3`` 0.38, 0.50, 0.63; 1.8 m at 3: 0.44,
-0.45, 0.72. Part of the difference comes before any reflection of the wave train could return (in
-3.4–6 s): the start's long wave, which runs at ``sqrt(g d)`` and reflects off the tank's end first. The walls are free-slip; the
+reflection returns.
+
+How much the tank's end reflects is measured in every run whose tank has room: three gauges
+(``eta_gauge_1 … 3``, at Mansard & Funke's 1980 spacing, the last two depths before the sponge or
+the far wall) split the first harmonic into incident and reflected waves
+(:func:`~mlsgalerkin.analysis.waves.incident_reflected`), over two-period windows in which both
+stand steady at the gauges: after the reflected wave has reached them at full height, before the
+paddle sends it back (:func:`reflection_window`). ``reflection_coefficient`` is the median of
+``|a_R|/|a_I|`` over the windows (``_min``, ``_max`` their spread); ``sponge_round_trip_attenuation``
+``exp(−σ_max L_s / (3 c_g))`` is what the sponge's damping alone leaves of a wave that crosses it,
+meets the wall and comes back (its floor), ``viscous_decay_round_trip`` what the artificial
+viscosity takes from a round trip between the gauges and the far wall. Measured at 10 rows per
+depth with the sponge 3 m from the paddle (``verification/results/wave_absorption/summary.md``,
+2026-12-03; paddle started over one period): a bare wall 0.89 (0.81–0.98 over the windows; a perfect reflector would read 0.94 after the artificial viscosity); a one-wavelength sponge (1.2 m)
+at ``sponge_rate`` 3 / 5 / 10 reflects 0.29 / 0.13 / 0.19 (floors 0.27 / 0.12 / 0.01: at 3 the
+damping is too weak, at 10 the rise of ``σ_max = 10/s`` above ``ω = 6.3/s`` reflects a part of
+the wave itself); 0.6 m at 10: 0.14; two wavelengths (2.4 m) at 5: **0.06**. The default
+``sponge_rate`` is 5; a sponge of two wavelengths is the recommendation. The start's long wave
+(at ``sqrt(g d)``, many metres long) is not absorbed by a zone this short. The walls are free-slip; the
 pressure of the piston's wall particles uses ``g − a_piston``. The gauge stands two depths from
 the paddle, where the first evanescent mode has decayed to ``e^{-2π}`` and the wave has lost
 little to the artificial viscosity, which acts as a kinematic viscosity ``ν ≈ α h c0 / 8``
@@ -59,6 +71,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from mlsgalerkin.analysis.measured import not_measured
+from mlsgalerkin.analysis.waves import (
+    complex_amplitude,
+    gauge_positions,
+    harmonic_fit,
+    incident_reflected,
+)
 from mlsgalerkin.fluid import (
     SHIFTING_MODES,
     FluidBody,
@@ -88,7 +106,7 @@ class Parameters:
     probe_x: float = 0.4            #: position of the wave gauge from the paddle's mean position (m)
     tank_length: float = 4.0        #: distance from the paddle to the far wall (m)
     sponge_length: float = 0.0      #: a damping zone before the far wall, this long; 0: none, the wall reflects (m)
-    sponge_rate: float = 10.0       #: the sponge's damping rate at the far wall times the period, sigma_max T (–)
+    sponge_rate: float = 5.0        #: the sponge's damping rate at the far wall times the period, sigma_max T (–)
     dx: float = 0.01                #: particle spacing (m)
     t_end: float = 7.0              #: end time (s)
     ramp_periods: float = 2.0       #: paddle periods over which the paddle is switched on (–)
@@ -163,12 +181,14 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     paddle = WallBody("paddle", paddle_x, dx, normals=np.tile([1.0, 0.0], (len(paddle_x), 1)),
                       motion=Oscillation(p.stroke, p.period, direction=(1.0, 0.0), ramp=p.ramp_periods * p.period))
     n = water_body.n
-    x_p, half_width = p.probe_x, 4.0 * dx
+    half_width = 4.0 * dx
 
-    def eta(state) -> float:
-        s = state.fluid
-        w = _column_weights(s.x[:n, 0], x_p, half_width)
-        return float(np.dot(w, s.M[:n] / s.rho[:n])) - d
+    def elevation_at(x_g: float):
+        def eta(state) -> float:
+            s = state.fluid
+            w = _column_weights(s.x[:n, 0], x_g, half_width)
+            return float(np.dot(w, s.M[:n] / s.rho[:n])) - d
+        return eta
 
     def piston_x(state) -> float:
         return float(paddle.motion.displacement(state.t)[0])
@@ -181,7 +201,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     return Scene(
         [water_body, tank, paddle], [scheme], t_end=p.t_end, name="wave_maker",
         output=Output(every=p.frame_every, probe_every=p.probe_every, gif=p.gif, png=p.gif, color_by="pressure"),
-        probes=[Probe("eta", eta), Probe("piston_x", piston_x)],
+        probes=[Probe("eta", elevation_at(p.probe_x)), Probe("piston_x", piston_x)]
+        + [Probe(f"eta_gauge_{j + 1}", elevation_at(x_g)) for j, x_g in enumerate(reflection_gauges(p))],
         parameters=dict(p.__dict__),
     )
 
@@ -190,6 +211,97 @@ def sponge(p: Parameters) -> SpongeZone:
     """The damping zone over the last ``sponge_length`` of the tank: the rate rises as ``ξ²`` from 0 at
     ``tank_length − sponge_length`` to ``sponge_rate / period`` (1/s) at the far wall."""
     return SpongeZone(p.tank_length - p.sponge_length, p.sponge_length, p.sponge_rate / p.period, name="sponge")
+
+
+def reflection_gauges(p: Parameters) -> np.ndarray:
+    """Three gauges (m from the paddle) for splitting the waves into incident and reflected ones
+    (:func:`~mlsgalerkin.analysis.waves.incident_reflected`) at Mansard & Funke's spacing (a tenth and
+    a quarter of the wavelength), the last two depths before the sponge (the far wall without one):
+    as far from the paddle as they can stand, so that the reflected wave is measured before the
+    paddle sends it back (:func:`reflection_window`). Shape ``(3,)``, or ``(0,)`` when they would
+    stand within two depths of the probe (no ``eta_gauge_*`` columns then)."""
+    wavelength = 2 * math.pi / wave_number(p.period, p.depth, p.g)
+    x_end = p.tank_length - p.sponge_length - 2 * p.depth
+    x = gauge_positions(x_end - wavelength / 8.0, wavelength)
+    return x if x[0] - p.probe_x >= 2 * p.depth else np.zeros(0)
+
+
+def reflection_window(p: Parameters) -> tuple[float, float]:
+    """``(t_from, t_to)`` (s) in which both waves stand steady at the :func:`reflection_gauges`: from
+    one period after the wave reflected at the far wall has reached the first gauge at full height
+    (its front at the group velocity ``c_g``, the paddle's ramp behind it) to the arrival at the
+    first gauge of the paddle's own reflection of it, or the end of the run:
+    ``t_from = t_ramp + (2 L − x₁)/c_g + T``, ``t_to = min(t_end, (2 L + x₁)/c_g)``."""
+    cg = group_velocity(p.period, p.depth, p.g)
+    x = reflection_gauges(p)
+    x_first = float(x[0]) if x.size else p.probe_x
+    t_from = p.ramp_periods * p.period + (2 * p.tank_length - x_first) / cg + p.period
+    return t_from, min(p.t_end, (2 * p.tank_length + x_first) / cg)
+
+
+def end_reflection(t: np.ndarray, gauges: list[np.ndarray], p: Parameters) -> dict:
+    """The reflection coefficient of the tank's end (the far wall, or the sponge before it) at the
+    paddle's frequency, from the three gauges over :func:`reflection_window`. The window is cut
+    into windows of two periods, half a period apart; each is split into incident and reflected
+    waves (:func:`~mlsgalerkin.analysis.waves.incident_reflected`). ``reflection_coefficient``
+    ``|a_R|/|a_I|`` is their median, ``reflection_coefficient_min`` and ``_max`` their spread
+    (the tank's long waves pass), the incident and reflected heights and the two-wave model's
+    misfit their medians. Not measured when the window is shorter than two periods (the run ends
+    too early, or the gauges stand too close to the paddle: the reflected wave comes back before
+    the paddle's ramp is over) or the tank has no gauges."""
+    t_from, t_to = reflection_window(p)
+    out: dict = {"reflection_window_s": [t_from, t_to]}
+    keys = ("reflection_coefficient", "reflection_coefficient_min", "reflection_coefficient_max",
+            "incident_height_m", "reflected_height_m", "reflection_misfit")
+    if not gauges:
+        not_measured(out, keys, f"the {p.tank_length:g} m tank leaves no room for three gauges two depths from the "
+                                f"probe and from the {'sponge' if p.sponge_length > 0 else 'far wall'}; lengthen the tank")
+        return out
+    starts = np.arange(t_from, min(t_to, float(t[-1])) - 2 * p.period + 1e-9, 0.5 * p.period)
+    windows = [(t >= a) & (t < a + 2 * p.period) for a in starts]
+    if not windows or min(np.count_nonzero(w) for w in windows) < 20:
+        if (2 * p.tank_length + float(reflection_gauges(p)[0])) / group_velocity(p.period, p.depth, p.g) < t_from + 2 * p.period:
+            not_measured(out, keys, f"the paddle reflects the reflected wave back to the gauges before two periods of "
+                                    f"it were steady there (from {t_from:.2f} s): lengthen the tank between the "
+                                    f"paddle and the sponge (the gauges stand two depths before it)")
+        else:
+            not_measured(out, keys, f"the run ended at t = {t[-1]:.3g} s, before two periods of the reflected wave at "
+                                    f"the gauges (from {t_from:.2f} s)", run_to=t_from + 2 * p.period)
+        return out
+    omega, k = 2 * math.pi / p.period, wave_number(p.period, p.depth, p.g)
+    x = reflection_gauges(p)
+    splits = [incident_reflected(x, [complex_amplitude(t[w], g[w], omega) for g in gauges], k) for w in windows]
+    kr = np.array([sp.reflection_coefficient for sp in splits])
+    cg, nu = group_velocity(p.period, p.depth, p.g), numerical_viscosity(p)
+    out.update({"reflection_coefficient": float(np.median(kr)), "reflection_coefficient_min": float(kr.min()),
+                "reflection_coefficient_max": float(kr.max()), "reflection_windows": len(splits),
+                "incident_height_m": float(np.median([2 * abs(sp.incident) for sp in splits])),
+                "reflected_height_m": float(np.median([2 * abs(sp.reflected) for sp in splits])),
+                "reflection_misfit": float(np.median([sp.relative_misfit for sp in splits])),
+                # what a perfect reflector at the far wall would read: the viscous decay (Lamb 1932)
+                # of the wave's round trip from the gauges' centre to the far wall and back
+                "viscous_decay_round_trip": 1.0 - math.exp(-2.0 * nu * k * k * 2 * (p.tank_length - float(x.mean())) / cg),
+                "reflection_gauges_m": x.tolist()})
+    if p.sponge_length > 0:
+        out["sponge_round_trip_attenuation"] = sponge_round_trip_attenuation(p)
+    return out
+
+
+def sponge_round_trip_attenuation(p: Parameters) -> float:
+    r"""What is left of a wave after it has crossed the sponge, been reflected by the wall behind it
+    and crossed back (–): in a zone of Rayleigh damping ``σ ≪ ω`` a progressive wave's energy decays
+    at the rate ``σ`` (its kinetic energy is half of it), its amplitude over distance at
+    ``σ / (2 c_g)``, so the round trip leaves
+    :math:`\exp(-\int_0^{L_s} σ\,dx / c_g) = \exp(-σ_{max} L_s / (3 c_g))` for ``σ = σ_max ξ²``.
+    The reflection coefficient cannot fall below it; the zone's own reflection, from the rise of
+    ``σ``, adds to it as ``σ_max`` approaches ``ω``."""
+    sigma_max = p.sponge_rate / p.period
+    return math.exp(-sigma_max * p.sponge_length / (3.0 * group_velocity(p.period, p.depth, p.g)))
+
+
+def numerical_viscosity(p: Parameters) -> float:
+    """The kinematic viscosity the artificial viscosity acts as, ``ν ≈ α h c0 / 8`` (m²/s)."""
+    return p.alpha * p.h_factor * p.dx * p.c0_factor * math.sqrt(p.g * p.depth) / 8.0
 
 
 def measurement_window(p: Parameters) -> tuple[float, float]:
@@ -216,6 +328,9 @@ def analyse(result, p: Parameters) -> dict:
     out = {"kd": kd, "wavelength_m": 2 * math.pi / k, "group_velocity_m_s": group_velocity(p.period, p.depth, p.g),
            "H_over_S_theory": ratio_theory, "wave_height_theory_m": H_theory,
            "window_s": [t_from, t_to], "rows_per_depth": p.depth / p.dx}
+    columns = [f"eta_gauge_{j + 1}" for j in range(reflection_gauges(p).size)]
+    gauges = [np.asarray(ts[c]) for c in columns] if all(c in ts for c in columns) else []
+    out.update(end_reflection(t, gauges, p))
     sel = (t >= t_from) & (t <= t_to)
     if t_to - t_from < 2 * p.period or np.count_nonzero(sel) < 20:
         cg = out["group_velocity_m_s"]
@@ -254,7 +369,7 @@ def analyse(result, p: Parameters) -> dict:
     # the artificial viscosity acts as nu = alpha h c0 / 8; a progressive wave loses amplitude at the
     # rate 2 nu k^2 (Lamb 1932, §348), so between the paddle and the gauge it decays by about
     # 1 - exp(-2 nu k^2 x_p / c_g); the wave Reynolds number is omega / (nu k^2)
-    nu = p.alpha * p.h_factor * p.dx * p.c0_factor * math.sqrt(p.g * p.depth) / 8.0
+    nu = numerical_viscosity(p)
     out["numerical_viscosity_m2_s"] = nu
     out["wave_reynolds_number"] = omega / (nu * k * k)
     out["viscous_decay_to_gauge"] = 1.0 - math.exp(-2.0 * nu * k * k * p.probe_x / out["group_velocity_m_s"])
@@ -262,15 +377,6 @@ def analyse(result, p: Parameters) -> dict:
                        f"{1e3 * H_theory:.2f} mm (H/S {H / p.stroke:.3f} vs {ratio_theory:.3f}, "
                        f"{100 * out['relative_error']:+.1f} %), kd = {kd:.2f}, {p.depth / p.dx:.0f} rows per depth")
     return out
-
-
-def harmonic_fit(t: np.ndarray, eta: np.ndarray, omega: float) -> tuple[np.ndarray, np.ndarray]:
-    """Least-squares ``η ≈ c + a cos ωt + b sin ωt + a₂ cos 2ωt + b₂ sin 2ωt``: the coefficients
-    ``(c, a, b, a₂, b₂)`` (m) and the residuals (m) at the samples ``t`` (s)."""
-    A = np.column_stack([np.ones(t.size), np.cos(omega * t), np.sin(omega * t),
-                         np.cos(2 * omega * t), np.sin(2 * omega * t)])
-    coef, *_ = np.linalg.lstsq(A, eta, rcond=None)
-    return coef, eta - A @ coef
 
 
 def check(p: Parameters) -> list[str]:

@@ -35,6 +35,9 @@ from mlsgalerkin.fluid.recommended import RECOMMENDED
 from mlsgalerkin.io import atomic_write, csv_text, format_cell, provenance
 from mlsgalerkin.problem import run_problem
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from verification.report_format import produced_by
+
 SECTIONS = ("impact", "dam_break", "gravity", "gravity_lid", "rest", "drop", "ablation")
 
 
@@ -217,8 +220,7 @@ def write_table(out: Path, name: str, rows: list[dict], title: str, notes: str, 
     for r in rows:
         lines.append("| " + " | ".join(format_cell(r.get(k, "")) for k in keys) + " |")
     prov = provenance(f"{report}/{name}")
-    lines += ["", "Produced by: `" + prov["command"] + "`, mlsgalerkin " + prov["mlsgalerkin_version"]
-              + f", commit {prov['git_commit']}, {prov['date_utc']}, {prov['machine']}, numba threads {prov['numba_threads']}."]
+    lines += ["", produced_by(prov)]
     atomic_write(out / f"{name}.md", "\n".join(lines) + "\n")
 
 

@@ -32,6 +32,7 @@ from mlsgalerkin.problem import load_problem
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from verification.fluid_core import runner, write_table
+from verification.report_format import produced_by
 
 #: Young's moduli (MPa) of the gate scanned for the least-squares fit of the experiment's record.
 FIT_YOUNG_MPA = (4.0, 4.5, 5.5)       # and 5.0 (the default) and 6.08, 7.8 from the cases above
@@ -370,8 +371,7 @@ def gate_quasi_static(out: Path, rows: list[dict]) -> None:
                          f"{1e3 * sx:.1f} | {1e3 * ex[1]:.1f} | {1e3 * np.interp(tf, t, ts['tip_y']):.1f} | "
                          f"{1e3 * sy:.1f} | {1e3 * ey[1]:.1f} |")
     prov = provenance(f"{REPORT}/gate_quasi_static")
-    lines += ["", "Produced by: `" + prov["command"] + "`, mlsgalerkin " + prov["mlsgalerkin_version"]
-              + f", commit {prov['git_commit']}, {prov['date_utc']}, {prov['machine']}, numba threads {prov['numba_threads']}."]
+    lines += ["", produced_by(prov)]
     atomic_write(out / "gate_quasi_static.md", "\n".join(lines) + "\n")
 
 

@@ -2,7 +2,8 @@
 analysis of time series (:mod:`~mlsgalerkin.analysis.signals`); results a run did not measure
 (:mod:`~mlsgalerkin.analysis.measured`); a channel flow's row-averaged velocity profile against an
 exact one, split into a smooth part and a row-to-row alternation
-(:mod:`~mlsgalerkin.analysis.channel`)."""
+(:mod:`~mlsgalerkin.analysis.channel`); regular waves from gauge records, split into incident and
+reflected waves (:mod:`~mlsgalerkin.analysis.waves`)."""
 
 from mlsgalerkin.analysis.channel import ChannelProfileErrors, channel_profile_errors, row_means, three_row_filter
 from mlsgalerkin.analysis.convergence import (
@@ -31,6 +32,13 @@ from mlsgalerkin.analysis.signals import (
     threshold_windows,
     upward_crossings,
 )
+from mlsgalerkin.analysis.waves import (
+    IncidentReflected,
+    complex_amplitude,
+    gauge_positions,
+    harmonic_fit,
+    incident_reflected,
+)
 
 __all__ = [
     "ChannelProfileErrors",
@@ -58,4 +66,9 @@ __all__ = [
     "spectral_period",
     "threshold_windows",
     "upward_crossings",
+    "IncidentReflected",
+    "complex_amplitude",
+    "gauge_positions",
+    "harmonic_fit",
+    "incident_reflected",
 ]

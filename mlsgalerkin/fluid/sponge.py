@@ -3,8 +3,9 @@ r"""A damping (sponge) zone that absorbs waves at the end of a tank: the :class:
 A wave that reaches a tank's end wall reflects and returns. A floating body's heave then locks
 onto the tank's sloshing period, and the reflection ends the window in which a wave maker's
 waves can be compared with theory. A sponge zone damps the fluid's velocity towards rest over a
-stretch of the tank in front of the wall (Cummins, Silva & Rogers 2012; the "relaxation" or
-"damping" zones of DualSPHysics and PySPH):
+stretch of the tank in front of the wall, as a fictitious absorbing layer (Molteni, Grammauta &
+Vitanza 2013; the "damping" zones of DualSPHysics and PySPH; open boundaries that absorb actively
+are the alternative, Verbrugghe et al. 2019):
 
 .. math::
     \mathbf f_i \mathrel{-}= m_i\,\sigma(\xi_i)\,(\mathbf v_i - \mathbf v_\infty),\qquad
@@ -14,8 +15,18 @@ stretch of the tank in front of the wall (Cummins, Silva & Rogers 2012; the "rel
 where the zone starts at ``start`` (the point ``x_s`` along the axis ``e``), reaches full
 strength at ``start + length`` and continues beyond it; ``v_∞`` is the velocity the zone
 relaxes to (rest by default). The quadratic ramp keeps the reflection from the zone's own
-edge small. A wave of period ``T`` is absorbed when the zone is at least about a wavelength
-long and ``σ_max T`` is of order 10 (Cummins et al. 2012 use ``σ_max`` of a few per period).
+edge small.
+
+How much comes back. In the zone a progressive wave's energy decays at the rate ``σ`` (its kinetic
+energy is half of it), its amplitude over distance at ``σ/(2 c_g)`` (``c_g`` the group velocity);
+what crosses the zone, meets the wall behind it and crosses back keeps
+``exp(−σ_max L / (3 c_g))`` of its amplitude (for ``σ ≪ ω``). That is the floor of the
+reflection coefficient; the rise of ``σ`` reflects a part of the wave itself, more as ``σ_max``
+approaches the wave's angular frequency ``ω``. So a zone absorbs best when it is long (a
+wavelength or more) and ``σ_max`` moderate (``σ_max L / (3 c_g)`` of 2 or more, ``σ_max`` below
+``ω``). The wave maker measures its reflection coefficient by splitting three gauges' records
+into incident and reflected waves (``mlsgalerkin.problems.wave_maker``,
+``verification/wave_absorption.py``).
 
 The damping is explicit: the time step is limited to ``Δt ≤ 1/σ_max`` (a relaxation of one
 step at most). Inside the zone the flow is not physical; measure outside it.
