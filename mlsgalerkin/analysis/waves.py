@@ -33,8 +33,8 @@ gauges. Mansard & Funke recommend gauges at ``x₁``, ``x₁ + L/10`` and ``x₁
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
