@@ -232,11 +232,19 @@ def reflection_window(p: Parameters) -> tuple[float, float]:
     (its front at the group velocity ``c_g``, the paddle's ramp behind it) to the arrival at the
     first gauge of the paddle's own reflection of it, or the end of the run:
     ``t_from = t_ramp + (2 L − x₁)/c_g + T``, ``t_to = min(t_end, (2 L + x₁)/c_g)``."""
+    t_from, t_return, _ = _reflection_timing(p)
+    return t_from, min(p.t_end, t_return)
+
+
+def _reflection_timing(p: Parameters) -> tuple[float, float, np.ndarray]:
+    """``(t_from, t_return, x)``: :func:`reflection_window`'s start, the paddle's reflection's
+    arrival at the first gauge ``(2 L + x₁)/c_g`` (s, not clamped to ``t_end``) and the gauges
+    ``x`` (m, :func:`reflection_gauges`)."""
     cg = group_velocity(p.period, p.depth, p.g)
     x = reflection_gauges(p)
     x_first = float(x[0]) if x.size else p.probe_x
     t_from = p.ramp_periods * p.period + (2 * p.tank_length - x_first) / cg + p.period
-    return t_from, min(p.t_end, (2 * p.tank_length + x_first) / cg)
+    return t_from, (2 * p.tank_length + x_first) / cg, x
 
 
 def end_reflection(t: np.ndarray, gauges: list[np.ndarray], p: Parameters) -> dict:
@@ -249,7 +257,8 @@ def end_reflection(t: np.ndarray, gauges: list[np.ndarray], p: Parameters) -> di
     misfit their medians. Not measured when the window is shorter than two periods (the run ends
     too early, or the gauges stand too close to the paddle: the reflected wave comes back before
     the paddle's ramp is over) or the tank has no gauges."""
-    t_from, t_to = reflection_window(p)
+    t_from, t_return, x = _reflection_timing(p)
+    t_to = min(p.t_end, t_return)
     out: dict = {"reflection_window_s": [t_from, t_to]}
     keys = ("reflection_coefficient", "reflection_coefficient_min", "reflection_coefficient_max",
             "incident_height_m", "reflected_height_m", "reflection_misfit")
@@ -260,7 +269,7 @@ def end_reflection(t: np.ndarray, gauges: list[np.ndarray], p: Parameters) -> di
     starts = np.arange(t_from, min(t_to, float(t[-1])) - 2 * p.period + 1e-9, 0.5 * p.period)
     windows = [(t >= a) & (t < a + 2 * p.period) for a in starts]
     if not windows or min(np.count_nonzero(w) for w in windows) < 20:
-        if (2 * p.tank_length + float(reflection_gauges(p)[0])) / group_velocity(p.period, p.depth, p.g) < t_from + 2 * p.period:
+        if t_return < t_from + 2 * p.period:
             not_measured(out, keys, f"the paddle reflects the reflected wave back to the gauges before two periods of "
                                     f"it were steady there (from {t_from:.2f} s): lengthen the tank between the "
                                     f"paddle and the sponge (the gauges stand two depths before it)")
@@ -269,7 +278,6 @@ def end_reflection(t: np.ndarray, gauges: list[np.ndarray], p: Parameters) -> di
                                     f"the gauges (from {t_from:.2f} s)", run_to=t_from + 2 * p.period)
         return out
     omega, k = 2 * math.pi / p.period, wave_number(p.period, p.depth, p.g)
-    x = reflection_gauges(p)
     splits = [incident_reflected(x, [complex_amplitude(t[w], g[w], omega) for g in gauges], k) for w in windows]
     kr = np.array([sp.reflection_coefficient for sp in splits])
     cg, nu = group_velocity(p.period, p.depth, p.g), numerical_viscosity(p)
