@@ -1,6 +1,7 @@
 """Meshfree approximation: MLS, RKPM, Shepard and orthogonal-basis shape functions.
 
-See :func:`shape_functions` (the public entry point) and :class:`ShapeTable`.
+See :func:`shape_functions` (the public entry point) and :class:`ShapeTable`;
+:func:`implicit_second_derivatives` gives second derivatives from a quadratic least-squares fit.
 """
 
 from mlsgalerkin.approximation.build import (
@@ -10,6 +11,7 @@ from mlsgalerkin.approximation.build import (
     evaluate_shape_functions,
     shape_functions,
 )
+from mlsgalerkin.approximation.implicit_derivatives import implicit_second_derivatives
 from mlsgalerkin.approximation.table import ShapeTable
 
 __all__ = [
@@ -18,5 +20,6 @@ __all__ = [
     "ShapeFunctionFallbackWarning",
     "ShapeTable",
     "evaluate_shape_functions",
+    "implicit_second_derivatives",
     "shape_functions",
 ]
