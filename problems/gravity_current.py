@@ -47,15 +47,16 @@ mm, which is 13 rows at ``D = 0.04`` m (−20.3, −14.1 and −12.6 %) and 40 a
 exchange is lopsided at every resolution (``verification/results/fluid_core/gravity_lid.md``,
 ``python verification/fluid_core.py --section gravity_lid``; ``analyse`` reports both fronts:
 ``light_froude_number`` and ``front_speed_ratio``, the light front's speed over the heavy head's,
-1 in a Boussinesq exchange under a lid). At 20, 40 and 60 rows the head runs −6.9, +18.5 and
-+30.2 % and the light front at 0.81, 0.68 and 0.59 of its speed (at 20 rows the round-off of
-the parallel sums alone moves the head by about ±1.5 %: −8.4 % on one numba thread, −6.0 % on
-two). One setting changed at a time at 40 rows: free-slip walls 0.90 (+27.8 %), no shifting
-0.79 (+3.5 %), a free surface 1.07 (+3.3 %); the penalty surface (0.65 without), direct nodal
-integration (0.71), the lid's pressure level (0.70 at 0.2 ``ρ_heavy g D``), ``α = 0.02`` (0.67) and
-``δ = 0.05`` (0.66) do not remove it;
-without density diffusion the run diverges (0.93 s; 0.83 s at 60 rows). At ``Δρ/ρ0 = 0.03`` the
-ratio is 0.32 under the lid (+46.6 %) and 0.57 with a free surface (+43.6 %). The mechanism
+1 in a Boussinesq exchange under a lid). At 20, 40 and 60 rows the head runs −8.4, +20.5 and
++31.6 % and the light front at 0.83, 0.68 and 0.61 of its speed (table regenerated 2026-12-03,
+one numba thread per run; the round-off of the parallel sums alone moves the head at 20 rows by
+about ±1.5 %: −6.0 % on two threads). One setting changed at a time at 40 rows: free-slip walls
+0.91 (+22.4 %), no shifting 0.72 (+6.2 %), a free surface 1.07 (+3.3 %); the penalty surface
+(0.61 without), direct nodal integration (0.75, +7.0 %), the lid's pressure level (0.74 at 0.2
+``ρ_heavy g D``), ``α = 0.02`` (0.64) and ``δ = 0.05`` (0.65) do not remove it; without density
+diffusion the run completes at 40 rows (0.77, +7.7 %, volume error 1.7 %) and diverges at 60
+rows (0.74 s). At ``Δρ/ρ0 = 0.03`` the ratio is 0.32 under the lid (+51.2 %) and 0.57 with a free
+surface (+43.6 %). The mechanism
 (``docs/theory/stabilisation.md`` §7): the fronts' pressure leaves the linear consistency's
 linearity limit first, those nodes fall back to direct nodal integration, whose error on the
 disordered lattice of the mixing zone scales with the pressure itself (so with ``g``, not
