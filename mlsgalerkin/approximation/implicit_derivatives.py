@@ -92,23 +92,10 @@ def _implicit_hessians(indptr, offsets, weights, scale, exps, slots, condition_l
             for a in range(m):
                 for b in range(m):
                     A[a, b] += weights[p] * P[a] * P[b]
-        # 1-norm condition number (the moment matrix is symmetric positive semi-definite)
-        norm = 0.0
-        for a in range(m):
-            s = 0.0
-            for b in range(m):
-                s += abs(A[a, b])
-            norm = max(norm, s)
-        if norm <= 0.0 or np.linalg.matrix_rank(A) < m:
+        if np.linalg.matrix_rank(A) < m:
             continue
         Ainv = np.linalg.inv(A)
-        inorm = 0.0
-        for a in range(m):
-            s = 0.0
-            for b in range(m):
-                s += abs(Ainv[a, b])
-            inorm = max(inorm, s)
-        if not norm * inorm <= condition_limit:
+        if not np.linalg.norm(A, 1) * np.linalg.norm(Ainv, 1) <= condition_limit:   # 1-norm condition
             continue
         ok[k] = True
         l2 = scale[k] * scale[k]
