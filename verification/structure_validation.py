@@ -14,7 +14,9 @@ and 2 mm), ``spring`` (beam_on_spring: the impacts and the period, dx 30, 15 and
 spring and held fixed, and a dissipation study at 30 and 15 mm; also ``spring_depth.png``, the
 water's depth along the tank over time). Each section writes ``<section>.csv``, ``<section>.md``
 (with the command, version, commit and date) and a comparison plot into ``--out``; particle
-output goes to ``--runs`` (default ``results/structure_runs``, not committed).
+output goes to ``--runs`` (default ``results/structure_runs``, not committed). Every row also
+states the run's largest ``|geometric volume / Σ M/ρ − 1|`` (``largest_volume_error``, from the
+run checks in ``summary.json``).
 """
 
 from __future__ import annotations
@@ -38,7 +40,7 @@ from verification.report_format import produced_by
 FIT_YOUNG_MPA = (4.0, 4.5, 5.5)       # and 5.0 (the default) and 6.08, 7.8 from the cases above
 SECTIONS = ("plate", "gate", "wedge", "clamped", "spring")
 REPORT = "structure"
-COMMON = ["case", "status", "fluid_particles", "steps", "t_reached_s", "max_penetration_dx",
+COMMON = ["case", "status", "fluid_particles", "steps", "t_reached_s", "max_penetration_dx", "largest_volume_error",
           "numerical_viscosity_m2_per_s", "numerical_reynolds_number", "wall_time_s", "wall_s_per_simulated_s",
           "run_commit"]
 
@@ -346,12 +348,12 @@ def gate_quasi_static(out: Path, rows: list[dict]) -> None:
     gate = load_problem("elastic_gate")
     ref = gate.load_reference()
     lines = ["# elastic_gate: the run against the gate's quasi-static answer", "",
-             "At each particle frame: the water level behind the gate (the highest water particle over the middle "
+             ("At each particle frame: the water level behind the gate (the highest water particle over the middle "
              "half of the column, + dx/2), the run's tip displacement, the static tip displacement of the same "
              "gate model under a still column of that level (neo-Hookean, hydrostatic dead load, "
-             "`elastic_gate.static_tip`), and the experiment (Antoci et al. 2007) at the nearest time.", "",
-             "| case | t_s | water_level_m | tip_x_run_mm | tip_x_static_mm | tip_x_experiment_mm | tip_y_run_mm | "
-             "tip_y_static_mm | tip_y_experiment_mm |", "|---|---|---|---|---|---|---|---|---|"]
+             "`elastic_gate.static_tip`), and the experiment (Antoci et al. 2007) at the nearest time."), "",
+             ("| case | t_s | water_level_m | tip_x_run_mm | tip_x_static_mm | tip_x_experiment_mm | tip_y_run_mm | "
+             "tip_y_static_mm | tip_y_experiment_mm |"), "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         run_dir = Path(r.get("run_dir") or "")
         if not (run_dir / "particles.pvd").is_file() or "young_Pa" not in r or r["case"].endswith(" fit"):
@@ -400,8 +402,8 @@ def main(argv: list[str] | None = None) -> int:
             gate_quasi_static(out, rows)
         if section == "spring" and not args.quick:
             spring_depth_plot(out, rows)
-    index = ["# Structures loaded by the fluid: validation", "", "Sections (each table states its goal and how it "
-             "was produced):", ""]
+    index = ["# Structures loaded by the fluid: validation", "", ("Sections (each table states its goal and how it "
+             "was produced):"), ""]
     index += [f"- [{p.stem}]({p.name})" for p in sorted(out.glob("*.md")) if p.name != "summary.md"]
     atomic_write(out / "summary.md", "\n".join(index) + "\n")
     return 0
