@@ -209,7 +209,7 @@ def _tiles(u_lo: NDArray[np.int64], u_hi: NDArray[np.int64], tile: int) -> tuple
     """The tiles each particle's reach ``[u_lo, u_hi]`` (pixel indices, inclusive, ``(n, d)``)
     meets: ``(particle (m,), tile index (m, d))``, one row per particle and tile (``tile`` pixels
     per tile side; a reach meets at most two tiles per axis as it is narrower than a tile)."""
-    n, dim = u_lo.shape
+    dim = u_lo.shape[1]
     t_lo = np.floor_divide(u_lo, tile)
     t_hi = np.floor_divide(u_hi, tile)
     owners, keys = [], []
