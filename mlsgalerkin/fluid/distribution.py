@@ -119,6 +119,13 @@ def _rasterise(x, origin, pixel, half, shape, grid):
                     grid[i, j, k] = 1
 
 
+def _close(grid: NDArray[np.uint8], size: tuple[int, ...]) -> NDArray[np.uint8]:
+    """The closing of ``grid``: a maximum filter then a minimum filter over a box of ``size``
+    pixels, zero beyond the grid's edges."""
+    return ndimage.minimum_filter(ndimage.maximum_filter(grid, size=size, mode="constant", cval=0),
+                                  size=size, mode="constant", cval=0)
+
+
 def grid_lower_corner(x: NDArray[np.float64], spacing: float, pixel: float) -> NDArray[np.float64]:
     """The lower corner ``(d,)`` (m) of the pixel grid (without its padding) over the cells of
     side ``spacing`` (m) around ``x (n, d)``: at most one ``pixel`` (m) below the lowest cell face
@@ -173,8 +180,7 @@ def occupancy(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = 
     grid = np.zeros(tuple(full), dtype=np.uint8)
     _rasterise(x, origin, pixel, 0.5 * spacing, full, grid)
     size = tuple(2 * r + 1 if a < dim else 1 for a in range(3))
-    grid = ndimage.minimum_filter(ndimage.maximum_filter(grid, size=size, mode="constant", cval=0),
-                                  size=size, mode="constant", cval=0)
+    grid = _close(grid, size)
     return grid, pixel
 
 
@@ -200,8 +206,7 @@ def occupancy_reference(x: NDArray[np.float64], spacing: float, pixels_per_spaci
             inside &= np.abs(centres[a] - x[p, a]) < 0.5 * spacing
         grid |= inside
     size = (2 * r + 1,) * dim
-    closed = ndimage.minimum_filter(ndimage.maximum_filter(grid.astype(np.uint8), size=size, mode="constant", cval=0),
-                                    size=size, mode="constant", cval=0)
+    closed = _close(grid.astype(np.uint8), size)
     return closed.reshape(tuple(shape) + (1,) * (3 - dim))
 
 
@@ -241,8 +246,7 @@ def _closed_count(x, u_lo, u_hi, origin, pixel, spacing, r, size, core_lo, tile)
     local_origin[:dim] = origin + lo * pixel
     grid = np.zeros(tuple(shape), dtype=np.uint8)
     _rasterise(x, local_origin, pixel, 0.5 * spacing, shape, grid)
-    grid = ndimage.minimum_filter(ndimage.maximum_filter(grid, size=size, mode="constant", cval=0),
-                                  size=size, mode="constant", cval=0)
+    grid = _close(grid, size)
     if core_lo is None:
         return int(np.count_nonzero(grid))
     window = [slice(None)] * 3
