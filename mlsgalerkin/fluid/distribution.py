@@ -33,9 +33,12 @@ in a 2D block 5–9 ms, 100 000 in a jittered 3D block 0.14–0.18 s, an 800-par
 spread over a 0.3 m × 0.45 m tank 1.7 ms (the grid spans the particles' bounding box; the
 closing, two :mod:`scipy.ndimage` filters over it, is most of the cost): cheap enough for a
 time-series row, too dear for every step. :func:`geometric_volume` builds one grid when the
-fluid's bounding box fits a tile of :data:`TILE_PIXELS` pixels per side, and otherwise only the
-tiles that hold particles (each from the particles within the closing's reach of it, cropped to
-them): the count is the same, and a splash flown far from the bulk costs its own tile. (One grid
+fluid fills a fair share of its bounding box (:data:`SINGLE_GRID_FILL`), and otherwise only the
+tiles of :data:`TILE_PIXELS` pixels per side that hold particles (each from the particles within
+the closing's reach of it, cropped to them): the count is the same, and a splash flown far from
+the bulk costs its own tile. (Tiles of 4096 pixels per side cost 0.2–0.64 s a row in the beam's
+run while its splashes were 1–4 m from the bulk, whose tile they shared; 256 pixels cost
+3–8 ms.) (One grid
 over the whole bounding box had to be coarsened to two pixels per spacing for a dam break on a
 beam with four particles fallen 22 m below the tank: its closing then filled gaps a whole spacing
 wide, the volume read +17 % and each time-series row cost 1.5–2.3 s instead of 2–3 ms.) The
@@ -71,6 +74,8 @@ __all__ = [
     "CLUMP_DISTANCE",
     "MAX_PIXELS",
     "PIXELS_PER_SPACING",
+    "SINGLE_GRID_FILL",
+    "SINGLE_GRID_PIXELS",
     "TILE_PIXELS",
     "PairStatistics",
     "geometric_volume",
@@ -88,9 +93,15 @@ PIXELS_PER_SPACING = 4
 CLOSED_GAP = 0.5
 #: The largest grid (pixels or voxels of the bounding box); above it ``k`` is halved (down to 2).
 MAX_PIXELS = 40_000_000
-#: Pixels per tile side of :func:`geometric_volume`, by dimension (1D, 2D, 3D): about 17 million
-#: pixels per tile (17 MB of ``uint8``).
-TILE_PIXELS = {1: 1 << 24, 2: 4096, 3: 256}
+#: Pixels per tile side of :func:`geometric_volume`, by dimension (1D, 2D, 3D): 65 536 pixels
+#: (2D) or 262 144 voxels (3D) per tile, a few milliseconds each.
+TILE_PIXELS = {1: 1 << 16, 2: 256, 3: 64}
+#: :func:`geometric_volume` builds one grid over the fluid's bounding box when the box holds no
+#: more than this many times the pixels of the particles' cells (or no more than
+#: :data:`SINGLE_GRID_PIXELS`), and tiles otherwise.
+SINGLE_GRID_FILL = 8
+#: A bounding box of up to this many pixels is always one grid.
+SINGLE_GRID_PIXELS = 1 << 16
 #: Fluid pairs closer than this many spacings are *clumped*.
 CLUMP_DISTANCE = 0.5
 
@@ -262,12 +273,15 @@ def geometric_volume(x: NDArray[np.float64], spacing: float, pixels_per_spacing:
     the gaps up to ``closed_gap`` spacings closed, on a grid of ``spacing / pixels_per_spacing``
     (module docstring). 0 without particles.
 
-    The grid is cut into tiles of ``tile`` pixels per side (default :data:`TILE_PIXELS` for the
-    dimension) and only the tiles that hold particles are built, each from the particles whose
-    cells reach within ``2r + 1`` pixels of it (the closing's reach), cropped to their bounding
-    box, and counted over its own pixels: the same count as one grid over the bounding box of
-    all the particles (:func:`occupancy`), at the full resolution and a cost set by the fluid's
-    extent, not by how far a splash has flown."""
+    One grid spans the particles' bounding box when it fits a tile, or (``tile=None``) when the
+    box holds no more than :data:`SINGLE_GRID_FILL` times the pixels of the particles' cells or
+    :data:`SINGLE_GRID_PIXELS` pixels: a compact fluid. Otherwise the grid is cut into tiles of
+    ``tile`` pixels per side (default :data:`TILE_PIXELS` for the dimension) and only the tiles
+    that hold particles are built, each from the particles whose cells reach within ``2r + 1``
+    pixels of it (the closing's reach), cropped to their bounding box, and counted over its own
+    pixels: the same count as one grid over the bounding box of all the particles
+    (:func:`occupancy`), at the full resolution and a cost set by the fluid's extent, not by how
+    far a splash has flown."""
     x = np.ascontiguousarray(x, dtype=np.float64)
     if x.shape[0] == 0:
         return 0.0
@@ -275,7 +289,8 @@ def geometric_volume(x: NDArray[np.float64], spacing: float, pixels_per_spacing:
     k = int(pixels_per_spacing)
     r = max(1, math.ceil(closed_gap * k / 2))
     pixel = spacing / k
-    tile = int(tile if tile is not None else TILE_PIXELS[dim])
+    automatic = tile is None
+    tile = int(TILE_PIXELS[dim] if automatic else tile)
     origin = grid_lower_corner(x, spacing, pixel)
     # pixel indices of each cell's first and last pixel (centres strictly inside the cell; one
     # pixel of slack either way, the rasteriser decides), widened by the closing's reach
@@ -288,7 +303,9 @@ def geometric_volume(x: NDArray[np.float64], spacing: float, pixels_per_spacing:
                          f"({int((u_hi - u_lo).max()) + 2 * reach} pixels); use a larger tile")
     size = tuple(2 * r + 1 if a < dim else 1 for a in range(3))
     span = u_hi.max(axis=0) - u_lo.min(axis=0) + 2 * (r + 2)
-    if np.prod(span.astype(float)) <= float(tile) ** dim:   # the whole fluid fits one tile: one grid
+    box = float(np.prod(span.astype(float)))
+    compact = automatic and box <= max(SINGLE_GRID_FILL * x.shape[0] * float(k) ** dim, SINGLE_GRID_PIXELS)
+    if compact or box <= float(tile) ** dim:           # one grid over the whole fluid
         return float(_closed_count(x, u_lo, u_hi, origin, pixel, spacing, r, size, None, tile)) * pixel ** dim
     owner, key = _tiles(u_lo - reach, u_hi + reach, tile)
     order = np.lexsort(key.T[::-1])
