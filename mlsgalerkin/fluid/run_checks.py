@@ -52,6 +52,7 @@ from typing import Any
 import numpy as np
 
 from mlsgalerkin.fluid.distribution import CLUMP_DISTANCE, geometric_volume, pair_statistics
+from mlsgalerkin.fluid.domain_exit import OUTSIDE
 from mlsgalerkin.fluid.eos import MachNumberWarning
 from mlsgalerkin.fluid.state import FluidState
 
@@ -137,9 +138,11 @@ class FluidRunChecks:
     def _distribution(self, s: FluidState) -> dict[str, float]:
         f = s.fluid
         out: dict[str, float] = {}
-        if s.n_fluid:
-            vgeo = geometric_volume(s.x[f], s.spacing)
-            vmass = float(np.sum(s.M[f] / s.rho[f]))
+        out_rows = s.extra.get(OUTSIDE)
+        inside = ~out_rows[f] if out_rows is not None else np.ones(s.n_fluid, dtype=bool)
+        if inside.any():    # the particles taken out of the run (domain_exit) are left out
+            vgeo = geometric_volume(s.x[f][inside], s.spacing)
+            vmass = float(np.sum(s.M[f][inside] / s.rho[f][inside]))
             err = vgeo / vmass - 1.0
             out["geometric_volume"] = vgeo
             out["volume_error"] = err

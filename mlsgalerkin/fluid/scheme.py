@@ -82,6 +82,10 @@ class FluidScheme(Scheme):
         ``Periodic(x=(0.0, L))``): neighbours, shape functions and every pair term see across
         the seam (minimum-image offsets) and the fluid particles wrap back into the box after
         each drift. ``None`` (default): no periodic axis.
+    domain_exit : bool
+        Take the fluid particles that leave the domain (the particles' starting bounding box
+        widened by two search radii, open above) out of the run (default ``True``; a scene
+        without wall particles has no domain; :mod:`mlsgalerkin.fluid.domain_exit`).
     """
 
     solver: ClassVar[str] = "mlsgalerkin.fluid.solver:FluidSolver"
@@ -95,6 +99,7 @@ class FluidScheme(Scheme):
     spacing: float | None = None
     periodic: Periodic | None = None
     stabilisation: str = "auto"
+    domain_exit: bool = True
 
     def __post_init__(self) -> None:
         listed = list(self.effects)
@@ -121,6 +126,8 @@ class FluidScheme(Scheme):
         out: list[str] = []
         if self.dt_max is not None and not (isinstance(self.dt_max, (int, float)) and self.dt_max > 0):
             out.append(f"dt_max must be positive, got {self.dt_max!r}")
+        if not isinstance(self.domain_exit, bool):
+            out.append(f"domain_exit must be True or False, got {self.domain_exit!r}")
         if not (isinstance(self.safety, (int, float)) and 0 < self.safety <= 1.5):
             out.append(f"safety factor must be in (0, 1.5], got {self.safety!r}")
         try:

@@ -36,6 +36,7 @@ from mlsgalerkin.fluid.effect import SOLVER_QUANTITIES, STAGES, Effect
 from mlsgalerkin.fluid.geometry import geometry_problems
 from mlsgalerkin.fluid.integrators import make_integrator
 from mlsgalerkin.fluid.penetration import PENETRATION_WARNING, penetration_depths, surface_offsets
+from mlsgalerkin.fluid.domain_exit import OUTSIDE, DomainExit
 from mlsgalerkin.fluid.eos import MachNumberWarning
 from mlsgalerkin.fluid.run_checks import (
     FluidRunChecks,
@@ -366,6 +367,14 @@ class FluidSolver(Solver):
         for e in ([pressure] if pressure is not None else []) + [e for e in self.effects if e is not pressure]:
             e.setup(s, ctx)
         s.c = s.c if s.c is not None else np.zeros(s.n)
+        # the domain the fluid particles may not leave (after the effects: gravity is known)
+        self.domain_exit = None
+        if scheme.domain_exit and s.n_fluid and s.n_walls:
+            periodic_axes = self.periodic.axes(s.dim) if self.periodic is not None else ()
+            self.domain_exit = DomainExit.around(s.x, float(np.max(self.search_radius)), s.gravity, periodic_axes)
+            if self.domain_exit is not None:
+                self.domain_exit.setup(s)
+        self._rebuild_neighbors = False
         self.move_walls(0.0)
         s.x_ref = s.x.copy()
         self.started = False
@@ -432,9 +441,10 @@ class FluidSolver(Solver):
             if self.periodic is not None:  # a particle wrapped across the seam moved by its image
                 disp = minimum_image(disp, s.period)
             moved = float(np.sqrt(np.max(np.einsum("ij,ij->i", disp, disp)))) if disp.shape[0] else 0.0
-            if moved <= 0.5 * self.approximation.skin * s.spacing:
+            if moved <= 0.5 * self.approximation.skin * s.spacing and not self._rebuild_neighbors:
                 return
             s.x_ref = s.x.copy()
+        self._rebuild_neighbors = False
         s.neighbors = self._find_neighbors()
         self.neighbor_builds += 1
         self.timer.add("neighbors", t0)
@@ -442,9 +452,10 @@ class FluidSolver(Solver):
     def _find_neighbors(self):
         """The neighbour table of the reference positions (across the seam of a periodic box)."""
         s = self._state
+        x = s.x_ref if self.domain_exit is None else self.domain_exit.search_positions(s.x_ref, s)
         if self.periodic is None:
-            return find_neighbors(s.x_ref, s.x_ref, radius=self.search_radius)
-        return find_neighbors(s.x_ref, s.x_ref, radius=self.search_radius, period=s.period, lower=self._lower)
+            return find_neighbors(x, x, radius=self.search_radius)
+        return find_neighbors(x, x, radius=self.search_radius, period=s.period, lower=self._lower)
 
     def kinematics(self) -> None:
         """Neighbours, shape functions, wall velocities, velocity gradient, continuity rate
@@ -478,7 +489,10 @@ class FluidSolver(Solver):
             condition_limit=ap.condition_limit, out=s.table, period=s.period,
             kernel_sum_volumes=s.M / s.rho if self._kernel_sum else None,
         )
-        s.fallback_count = int(np.count_nonzero(s.table.order[: s.n_fluid] < s.approximation_order))
+        low = s.table.order[: s.n_fluid] < s.approximation_order
+        if self.domain_exit is not None:     # an isolated particle taken out of the run falls back
+            low &= ~s.extra[OUTSIDE][: s.n_fluid]
+        s.fallback_count = int(np.count_nonzero(low))
 
     def continuity_rate(self, reuse_added: bool = False) -> None:
         """Wall velocities, ``L``, ``ρ̇ = −ρ tr L`` and the added continuity terms (density
@@ -624,6 +638,10 @@ class FluidSolver(Solver):
         for e in self._stage_effects["after_step"]:
             e.after_step(s)
             t0 = self.timer.add(e.name, t0)
+        if self.domain_exit is not None:
+            if self.domain_exit.after_step(s):
+                self._rebuild_neighbors = True   # the next search parks them away from everyone
+            t0 = self.timer.add("domain_exit", t0)
         if self._offsets is not None:
             self._measure_penetration()
             t0 = self.timer.add("wall_penetration", t0)
@@ -785,4 +803,5 @@ class FluidSolver(Solver):
             "wall_penetration": (dict(self.penetration, threshold_dx=PENETRATION_WARNING)
                                  if self._offsets is not None else None),
             "run_checks": to_jsonable(self.checks.summary(s, self.fallback_steps, self.fallback_points)),
+            "domain_exit": self.domain_exit.summary(s) if self.domain_exit is not None else None,
         } | ({"periodic": self.periodic.identity()} if self.periodic is not None else {})

@@ -204,6 +204,8 @@ class FluidState:
         if self.wall_penetrations is not None:
             row["wall_penetrations"] = int(self.wall_penetrations)
             row["max_wall_penetration_dx"] = float(self.max_wall_penetration_dx)
+        if "outside" in self.extra:      # fluid particles taken out of the run (fluid.domain_exit)
+            row["particles_outside"] = int(np.count_nonzero(self.extra["outside"]))
         row.update(self.sensors)
         if self.run_checks is not None:
             row.update(self.run_checks.row(self))
