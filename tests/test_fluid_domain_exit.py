@@ -25,6 +25,8 @@ from mlsgalerkin.fluid.domain_exit import (
     OUTSIDE,
     DomainExit,
     ParticlesLeftDomainWarning,
+    mark_and_hold,
+    mark_and_hold_reference,
 )
 from mlsgalerkin.fluid.scheme import FluidScheme
 from mlsgalerkin.scene import Output, Scene
@@ -44,6 +46,26 @@ def test_the_domain_is_the_starting_box_widened_and_open_above():
     periodic = DomainExit.around(x, 0.1, np.array([0.0, -9.81]), periodic_axes=(0,))
     assert periodic.lower[0] == -math.inf and periodic.upper[0] == math.inf and np.isfinite(periodic.lower[1])
     assert DomainExit.around(x, 0.1, None, periodic_axes=(0, 1)) is None   # nothing to leave
+
+
+@pytest.mark.parametrize("dim", [1, 2, 3])
+def test_the_marking_kernel_agrees_with_its_numpy_reference(dim, rng):
+    n, n_fluid = 400, 300
+    x = rng.uniform(-1.2, 1.2, (n, dim))
+    lower, upper = np.full(dim, -1.0), np.full(dim, 1.0)
+    upper[-1] = np.inf
+    out0 = rng.random(n) < 0.1
+    out0[n_fluid:] = False
+    arrays = [out0, rng.normal(size=(n, dim)), rng.normal(size=(n, dim)), rng.normal(size=n)]
+    a_copy = [a.copy() for a in arrays]
+    b_copy = [a.copy() for a in arrays]
+    new_a = mark_and_hold(x, n_fluid, lower, upper, *a_copy)
+    new_b = mark_and_hold_reference(x, n_fluid, lower, upper, *b_copy)
+    assert new_a.size > 10
+    np.testing.assert_array_equal(new_a, new_b)
+    for u, w in zip(a_copy, b_copy):
+        np.testing.assert_array_equal(u, w)
+    assert not a_copy[0][n_fluid:].any()                                # never a wall row
 
 
 def _scene(domain_exit: bool = True, t_end: float = 0.06) -> Scene:

@@ -37,12 +37,21 @@ import math
 import warnings
 from typing import Any
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
 from mlsgalerkin.fluid.state import FluidState
 
-__all__ = ["EXIT_TIME", "MARGIN_RADII", "OUTSIDE", "DomainExit", "ParticlesLeftDomainWarning"]
+__all__ = [
+    "EXIT_TIME",
+    "MARGIN_RADII",
+    "OUTSIDE",
+    "DomainExit",
+    "ParticlesLeftDomainWarning",
+    "mark_and_hold",
+    "mark_and_hold_reference",
+]
 
 #: The state's ``extra`` array that marks the fluid particles taken out of the run (bool ``(n,)``).
 OUTSIDE = "outside"
@@ -53,6 +62,42 @@ MARGIN_RADII = 2.0
 #: How far past the domain (in search radii) the neighbour search puts the particles taken out,
 #: and how far apart: no two of them, and none of them and a particle inside, are neighbours.
 _PARK_RADII = 4.0
+
+
+@numba.njit(cache=True)
+def mark_and_hold(x, n_fluid, lower, upper, out, v, a, drho):
+    """Mark the fluid rows ``< n_fluid`` of ``x (n, d)`` past ``lower``/``upper (d,)`` in ``out``
+    (bool ``(n,)``), and zero ``v``, ``a`` ``(n, d)`` and ``drho (n,)`` on every marked row.
+    Returns the rows marked now (int64). One pass over the fluid, no temporaries."""
+    new = np.empty(n_fluid, dtype=np.int64)
+    count = 0
+    dim = x.shape[1]
+    for i in range(n_fluid):
+        if not out[i]:
+            for k in range(dim):
+                if x[i, k] < lower[k] or x[i, k] > upper[k]:
+                    out[i] = True
+                    new[count] = i
+                    count += 1
+                    break
+        if out[i]:
+            for k in range(dim):
+                v[i, k] = 0.0
+                a[i, k] = 0.0
+            drho[i] = 0.0
+    return new[:count]
+
+
+def mark_and_hold_reference(x, n_fluid, lower, upper, out, v, a, drho):
+    """numpy reference of :func:`mark_and_hold`."""
+    f = slice(0, n_fluid)
+    past = np.any(x[f] < lower, axis=1) | np.any(x[f] > upper, axis=1)
+    new = np.flatnonzero(past & ~out[f])
+    out[new] = True
+    v[out] = 0.0
+    a[out] = 0.0
+    drho[out] = 0.0
+    return new
 
 
 class ParticlesLeftDomainWarning(UserWarning):
@@ -105,23 +150,12 @@ class DomainExit:
     def after_step(self, s: FluidState) -> int:
         """Mark the fluid particles now past a bound, then hold every marked one still
         (``v``, ``a``, ``dρ/dt`` zero). Returns the number that left in this step."""
-        out = s.extra[OUTSIDE]
-        f = s.fluid
-        x = s.x[f]
-        past = np.any(x < self.lower, axis=1) | np.any(x > self.upper, axis=1)
-        new = np.flatnonzero(past & ~out[f])
+        new = mark_and_hold(s.x, s.n_fluid, self.lower, self.upper, s.extra[OUTSIDE], s.v, s.a, s.drho)
         if new.size:
-            out[new] = True
             s.extra[EXIT_TIME][new] = s.t
             if not self._warned:
                 self._warned = True
                 self._warn(s, new)
-        if out.any():
-            s.v[out] = 0.0
-            if s.a is not None:
-                s.a[out] = 0.0
-            if s.drho is not None:
-                s.drho[out] = 0.0
         return int(new.size)
 
     def search_positions(self, x: NDArray[np.float64], s: FluidState) -> NDArray[np.float64]:
