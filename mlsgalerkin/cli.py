@@ -100,6 +100,7 @@ def _cmd_problems(args: argparse.Namespace) -> int:
         load_problem,
         parameter_table,
         problem_description,
+        problem_notes,
         shipped_problems,
     )
 
@@ -118,6 +119,9 @@ def _cmd_problems(args: argparse.Namespace) -> int:
             print(f"    {line}")
         print(textwrap.indent(parameter_table(mod.Parameters, width=96), "    "))
     if args.problem:
+        notes = problem_notes(chosen[0][1])
+        if notes:   # what it models, its reference and the configuration its numbers were measured in
+            print("\n" + textwrap.indent(notes, "    "))
         copy = " (copy it to start your own case)" if args.problem in shipped_problems() else ""
         print(f"\nfile: {chosen[0][1].__file__}{copy}")
         print(f"Run it with `mlsgalerkin run {args.problem} --set PARAMETER=VALUE`.")

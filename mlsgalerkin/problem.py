@@ -55,6 +55,7 @@ __all__ = [
     "parse_overrides",
     "prepare_problem",
     "problem_description",
+    "problem_notes",
     "require",
     "require_nonnegative",
     "require_positive",
@@ -504,3 +505,12 @@ def problem_description(mod: ModuleType) -> str:
     doc = inspect.cleandoc(mod.__doc__ or "")
     first = doc.split("\n\n", 1)[0]
     return _plain(" ".join(first.split()))
+
+
+def problem_notes(mod: ModuleType) -> str:
+    """The rest of a problem module's docstring after its first paragraph (what it models, its
+    reference and the configuration its numbers were measured in), as plain text with the
+    docstring's own line breaks; empty when there is none."""
+    doc = inspect.cleandoc(mod.__doc__ or "")
+    parts = doc.split("\n\n", 1)
+    return _plain(parts[1].strip()) if len(parts) > 1 else ""

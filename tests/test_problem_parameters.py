@@ -173,6 +173,17 @@ def test_cli_shows_one_problem_with_units_and_meanings(path, capsys):
     assert f"mlsgalerkin run {path} --set PARAMETER=VALUE" in out
 
 
+def test_cli_shows_one_problem_with_what_its_numbers_were_measured_in(capsys):
+    """``mlsgalerkin problems NAME`` prints the docstring after its first paragraph below the table:
+    the reference and the configuration the problem's numbers were measured in."""
+    assert main(["problems", "beam_clamped"]) == 0
+    out = capsys.readouterr().out
+    table_end = out.index("render animation.gif")
+    assert out.index("Reference: Sun (2016)") > table_end
+    assert "Measured at the defaults" in out and "StructureCoupling" in out and ":class:" not in out
+    assert out.index("Measured at the defaults") < out.index("\nfile: ")
+
+
 def test_cli_output_does_not_depend_on_where_the_problem_file_lives(tmp_path, capsys):
     """The same problem file, copied into a short path and into a long one with spaces, prints the
     same description and table: only the path itself differs."""
