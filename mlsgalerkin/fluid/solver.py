@@ -32,11 +32,11 @@ from mlsgalerkin.approximation.build import evaluate_shape_functions
 from mlsgalerkin.assembly import internal_force_and_mass, velocity_gradient_divergence
 from mlsgalerkin.dynamics import SceneView, Solver, Surface
 from mlsgalerkin.fluid.bodies import FluidBody, WallBody
+from mlsgalerkin.fluid.domain_exit import OUTSIDE, DomainExit
 from mlsgalerkin.fluid.effect import SOLVER_QUANTITIES, STAGES, Effect
 from mlsgalerkin.fluid.geometry import geometry_problems
 from mlsgalerkin.fluid.integrators import make_integrator
 from mlsgalerkin.fluid.penetration import PENETRATION_WARNING, penetration_depths, surface_offsets
-from mlsgalerkin.fluid.domain_exit import OUTSIDE, DomainExit
 from mlsgalerkin.fluid.eos import MachNumberWarning
 from mlsgalerkin.fluid.run_checks import (
     FluidRunChecks,
