@@ -24,6 +24,7 @@ import warnings
 from dataclasses import dataclass
 from typing import Any
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -32,11 +33,14 @@ from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.fluid.time_step import acoustic_limit
 
 __all__ = [
+    "VOID_STRAIN",
     "MachNumberWarning",
     "TaitEOS",
     "TaitPressure",
     "hydrostatic_density",
     "hydrostatic_pressure",
+    "remember_void",
+    "remember_void_reference",
     "tait_density",
     "tait_energy",
     "tait_pressure",
@@ -45,6 +49,42 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+
+
+#: The state's ``extra`` array of the void strain a cavitated particle remembers (–,
+#: ``TaitPressure(void_memory=...)``).
+VOID_STRAIN = "void_strain"
+
+
+@numba.njit(cache=True)
+def remember_void(rho, rho0, eps, eps_max):
+    """The cavitation floor with a void memory, in place over ``rho``, ``rho0``, ``eps`` ``(n,)``:
+    ``ρ < ρ0`` adds ``min(ln(ρ0/ρ), ε_max − ε)`` to ``ε`` and sets ``ρ = ρ0``; ``ρ > ρ0`` with
+    ``ε > 0`` closes ``c = min(ε, ln(ρ/ρ0))`` and sets ``ρ = ρ0 e^{ln(ρ/ρ0) − c}``; other rows
+    are left bit for bit. Returns how many rows were floored."""
+    floored = 0
+    for i in range(rho.shape[0]):
+        if rho[i] < rho0[i]:
+            eps[i] = min(eps[i] + math.log(rho0[i] / rho[i]), eps_max)
+            rho[i] = rho0[i]
+            floored += 1
+        elif eps[i] > 0.0 and rho[i] > rho0[i]:
+            strain = math.log(rho[i] / rho0[i])
+            close = min(eps[i], strain)
+            eps[i] -= close
+            rho[i] = rho0[i] * math.exp(strain - close)
+    return floored
+
+
+def remember_void_reference(rho, rho0, eps, eps_max):
+    """numpy reference of :func:`remember_void`."""
+    below = rho < rho0
+    closing = (~below) & (eps > 0.0) & (rho > rho0)
+    strain = np.log(rho / rho0)
+    close = np.where(closing, np.minimum(eps, strain), 0.0)
+    eps[:] = np.where(below, np.minimum(eps - strain, eps_max), eps - close)
+    rho[:] = np.where(below, rho0, np.where(closing, rho0 * np.exp(strain - close), rho))
+    return int(np.count_nonzero(below))
 
 
 #: What :class:`TaitPressure` does with negative pressures (see its docstring).
@@ -208,7 +248,14 @@ class TaitPressure(Effect):
     the floorings are counted) or ``"free_surface"`` (the same floor on the particles that
     :class:`~mlsgalerkin.fluid.free_surface.FreeSurfaceDetection` flags as free surface — a
     surface in contact with air carries no tension — while the bulk keeps negative pressures;
-    needs ``FreeSurfaceDetection`` listed). Provides ``pressure`` and ``sound_speed``. Time-step limit: the
+    needs ``FreeSurfaceDetection`` listed). With ``"cavitate"``, ``void_memory`` ``ε_max > 0`` keeps
+    up to that much of the floored expansion as a void strain per particle, ``extra["void_strain"]``
+    (``ε``, –): a density ``ρ < ρ0`` from the continuity equation adds ``ln(ρ0/ρ)`` to ``ε``
+    (capped at ``ε_max``) and is floored at ``ρ0``; a later compression ``ln(ρ/ρ0) > 0`` first
+    closes ``ε``, and only the rest raises ``ρ``. A splash that lands must close the space it
+    opened before it carries pressure again, so the settled water does not keep a loose layer; the
+    cap keeps particles from meeting without pressure (``void_memory = 0``, the default: the plain
+    floor; ``docs/theory/stabilisation.md`` §3). Provides ``pressure`` and ``sound_speed``. Time-step limit: the
     acoustic CFL ``cfl · h/(c + |v|)`` (:func:`~mlsgalerkin.fluid.time_step.acoustic_limit`).
     """
 
@@ -219,9 +266,11 @@ class TaitPressure(Effect):
     role = "pressure"
 
     def __init__(self, c0: float | None = None, *, u_max: float | None = None, mach: float = 0.1,
-                 gamma: float = 7.0, cfl: float = 0.4, negative_pressure: str = "allow") -> None:
+                 gamma: float = 7.0, cfl: float = 0.4, negative_pressure: str = "allow",
+                 void_memory: float = 0.0) -> None:
         self.c0_arg, self.u_max, self.mach, self.gamma, self.cfl = c0, u_max, mach, gamma, cfl
         self.negative_pressure = negative_pressure
+        self.void_memory = void_memory
         self.c0 = float(c0) if c0 is not None else (u_max / mach if u_max else float("nan"))
         self.min_pressure = math.inf
         self.max_negative_fraction = 0.0
@@ -229,7 +278,8 @@ class TaitPressure(Effect):
         self.cavitated = 0
 
     def __repr__(self) -> str:
-        return f"TaitPressure(c0={self.c0:g}, gamma={self.gamma:g})"
+        memory = f", void_memory={self.void_memory:g}" if self.void_memory else ""
+        return f"TaitPressure(c0={self.c0:g}, gamma={self.gamma:g}{memory})"
 
     def check(self, ctx: EffectContext) -> list[str]:
         problems: list[str] = []
@@ -243,6 +293,11 @@ class TaitPressure(Effect):
         if self.negative_pressure not in NEGATIVE_PRESSURE_MODES:
             problems.append(f"TaitPressure: negative_pressure must be one of {NEGATIVE_PRESSURE_MODES}, got "
                             f"{self.negative_pressure!r}")
+        if not (isinstance(self.void_memory, (int, float)) and 0.0 <= self.void_memory < math.inf):
+            problems.append(f"TaitPressure: void_memory must be a finite number >= 0, got {self.void_memory!r}")
+        elif self.void_memory > 0 and self.negative_pressure != "cavitate":
+            problems.append(f"TaitPressure: void_memory acts with negative_pressure='cavitate' only, got "
+                            f"{self.negative_pressure!r}; set void_memory=0 or negative_pressure='cavitate'")
         if self.negative_pressure == "free_surface" and not ctx.provides("free_surface"):
             problems.append("TaitPressure(negative_pressure='free_surface') floors the density of the free-surface "
                             "particles: list FreeSurfaceDetection(), which flags them")
@@ -253,10 +308,18 @@ class TaitPressure(Effect):
     def setup(self, state: FluidState, ctx: EffectContext) -> None:
         state.c0, state.gamma = float(self.c0), float(self.gamma)
         state.c = np.full(state.n, self.c0)
+        if self._remembers_void() and VOID_STRAIN not in state.extra:
+            state.extra[VOID_STRAIN] = np.zeros(state.n)
+
+    def _remembers_void(self) -> bool:
+        return self.negative_pressure == "cavitate" and self.void_memory > 0
 
     def pressure(self, s: FluidState) -> None:
         f = s.fluid
-        if self.negative_pressure == "cavitate":
+        if self._remembers_void():
+            self.cavitated += remember_void(s.rho[: s.n_fluid], s.rho0[: s.n_fluid],
+                                            s.extra[VOID_STRAIN][: s.n_fluid], float(self.void_memory))
+        elif self.negative_pressure == "cavitate":
             below = s.rho[f] < s.rho0[f]
             self.cavitated += int(np.count_nonzero(below))
             np.maximum(s.rho[f], s.rho0[f], out=s.rho[f])

@@ -47,6 +47,7 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
           flow: tuple[float, float] | None = None, residual_viscosity: bool = False, newtonian: bool = False,
           delta: float = RECOMMENDED.delta, shifting: str = RECOMMENDED.shifting,
           density_filter: int = RECOMMENDED.density_filter, negative_pressure: str = "cavitate",
+          void_memory: float = 0.0,
           penalty_thickness: float | None = None,
           consistent_integration: bool = RECOMMENDED.consistent_integration,
           linear_consistency: bool = RECOMMENDED.linear_consistency, spacing: float | None = None,
@@ -54,7 +55,7 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
           approximation: Approximation | None = None, extra: Sequence[Effect] = (), **options: Any) -> FluidScheme:
     """The recommended :class:`~mlsgalerkin.fluid.scheme.FluidScheme` for water (module docstring).
 
-    Effects, in this order: ``TaitPressure(c0, u_max, negative_pressure)``; ``Gravity(gravity)``
+    Effects, in this order: ``TaitPressure(c0, u_max, negative_pressure, void_memory)``; ``Gravity(gravity)``
     (unless ``gravity`` is ``None``); ``Walls(slip)`` (unless ``slip`` is ``None``);
     ``NewtonianViscosity()`` if ``newtonian`` (each phase's own viscosity); ``MonaghanViscosity(alpha,
     residual=residual_viscosity, flow=flow)`` if ``alpha > 0``; then
@@ -84,7 +85,8 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
         ``integrator``, ``mass``, ``safety``, ``dt_max``, ``periodic`` of the scheme
         (``stabilisation`` is ``"as_listed"``: the effects above are exactly what is asked for).
     """
-    effects: list[Effect] = [TaitPressure(c0, u_max=u_max, negative_pressure=negative_pressure)]
+    effects: list[Effect] = [TaitPressure(c0, u_max=u_max, negative_pressure=negative_pressure,
+                                          void_memory=void_memory)]
     if gravity is not None:
         effects.append(Gravity(tuple(gravity)))
     if slip is not None:
