@@ -114,6 +114,7 @@ def test_particles_thrown_out_of_the_tank_are_taken_out_of_the_run():
     assert rep["upper_m"][1] is None                          # open above
     assert res.summary["fluid"]["diagnostics"]["total_mass_kg"] == pytest.approx(s.M[: s.n_fluid].sum())  # kept
     assert len(caught) == 1 and "left the domain" in str(caught[0].message)
+    assert f"{sim.solvers[0].domain_exit.upper[0]:.4g}" in str(caught[0].message)   # the bound it crossed
 
 
 def test_without_it_the_particle_keeps_falling_and_sets_the_step():

@@ -187,12 +187,12 @@ class DomainExit:
         return ~s.extra[OUTSIDE][s.fluid]
 
     def _warn(self, s: FluidState, new: NDArray[np.int64]) -> None:
-        k = int(new[0])
-        speed = float(np.linalg.norm(s.v[k]))
+        k = int(new[0])      # its velocity is already zero (held): the message gives where it crossed
+        bounds = ", ".join(f"[{lo:.4g}, {hi:.4g}]" for lo, hi in zip(self.lower, self.upper))
         warnings.warn(
-            f"at t = {s.t:.6g} s, {new.size} fluid particle(s) left the domain (the particles' starting bounding box "
-            f"widened by {MARGIN_RADII:g} search radii, open above): particle {k} at {np.round(s.x[k], 4).tolist()} m, "
-            f"moving at {speed:.3g} m/s. Nothing can bring them back, so they are taken out of the run: held where they "
+            f"at t = {s.t:.6g} s, {new.size} fluid particle(s) left the domain {bounds} m (the particles' starting "
+            f"bounding box widened by {MARGIN_RADII:g} search radii, open above): particle {k} at "
+            f"{np.round(s.x[k], 4).tolist()} m. Nothing can bring them back, so they are taken out of the run: held where they "
             "left, in no force, time step, kinetic energy or run check, their mass kept. The column particles_outside "
             "of timeseries.csv counts them and summary.json (fluid.domain_exit) reports their mass",
             ParticlesLeftDomainWarning, stacklevel=3)
