@@ -182,10 +182,6 @@ class DomainExit:
             parked[rows, a] = self.lower[a] - step * (1.0 + np.arange(rows.size))
         return parked
 
-    def inside(self, s: FluidState) -> NDArray[np.bool_]:
-        """The fluid rows still in the run, bool ``(n_fluid,)``."""
-        return ~s.extra[OUTSIDE][s.fluid]
-
     def _warn(self, s: FluidState, new: NDArray[np.int64]) -> None:
         k = int(new[0])      # its velocity is already zero (held): the message gives where it crossed
         bounds = ", ".join(f"[{lo:.4g}, {hi:.4g}]" for lo, hi in zip(self.lower, self.upper))
