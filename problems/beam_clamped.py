@@ -99,6 +99,7 @@ class Parameters:
     negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     void_memory: float = 0.0      #: void strain a cavitated particle remembers, 0 for none (cavitate only) (–)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
     c0_factor: float = 10.0       #: sound speed / 2 sqrt(gH) (–)
     g: float = 9.81               #: gravitational acceleration (m/s²)
     probe_every: float = 1.0e-3   #: time between time-series rows (s)
@@ -140,7 +141,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                                  wall_acceleration=p.wall_acceleration, iterations=p.iterations, tolerance=1e-7)
     scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
                    negative_pressure=p.negative_pressure, void_memory=p.void_memory, penalty_thickness=0.25 * p.dx,
-                   linear_consistency=p.linear_consistency, spacing=p.dx)
+                   linear_consistency=p.linear_consistency,
+                   volume_consistency=p.volume_consistency, spacing=p.dx)
 
     def tip_x(state) -> float:
         m = state.body("beam")

@@ -104,6 +104,7 @@ class Parameters:
     shifting: str = RECOMMENDED.shifting  #: particle shifting: local, design or off (choice)
     negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
     c0_factor: float = 10.0       #: sound speed / 2 sqrt(gH) (–)
     g: float = 9.81               #: gravitational acceleration (m/s²)
     probe_every: float = 1.0e-3   #: time between time-series rows (s)
@@ -147,7 +148,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                                  wall_acceleration=p.wall_acceleration)
     scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
                    negative_pressure=p.negative_pressure, penalty_thickness=0.25 * p.dx,
-                   linear_consistency=p.linear_consistency, spacing=p.dx)
+                   linear_consistency=p.linear_consistency,
+                   volume_consistency=p.volume_consistency, spacing=p.dx)
     approximation = scheme.approximation
     hinge = np.array([p.tank_length, 0.0])
     local = sensor_points((p.tank_length, 0.0), SENSOR_HEIGHT - 0.5 * SENSOR_SIZE, SENSOR_HEIGHT + 0.5 * SENSOR_SIZE,

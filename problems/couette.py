@@ -64,6 +64,7 @@ class Parameters:
     shifting: str = "local"          #: particle shifting: local, design or off (choice)
     consistent_integration: bool = False  #: consistent nodal integration (bool)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
     h_factor: float = 1.3            #: smoothing length / particle spacing, h/dx (–)
     basis: str = "linear"            #: MLS basis: linear or quadratic (choice)
     frame_every: float = 1.0         #: time between VTU frames (s)
@@ -112,7 +113,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     scheme = water(c0, u_max=p.wall_speed, gravity=None, slip="no_slip", alpha=p.alpha,
                    flow=(p.wall_speed, p.height), newtonian=True, delta=p.delta, shifting=p.shifting,
                    negative_pressure="allow", consistent_integration=p.consistent_integration,
-                   linear_consistency=p.linear_consistency, spacing=p.dx,
+                   linear_consistency=p.linear_consistency,
+                   volume_consistency=p.volume_consistency, spacing=p.dx,
                    approximation=Approximation(h_factor=p.h_factor, basis=p.basis),
                    periodic=Periodic(x=(0.0, p.length)))
     return Scene(

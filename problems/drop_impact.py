@@ -76,6 +76,7 @@ class Parameters:
     shifting: str = RECOMMENDED.shifting  #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
     consistent_integration: bool = RECOMMENDED.consistent_integration  #: nodal integration that meets the integration constraint (VCI) (bool)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
     density_filter: int = RECOMMENDED.density_filter  #: Shepard density filter every this many steps; 0 drops it (–)
     negative_pressure: str = "free_surface"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     h_factor: float = 1.3          #: smoothing length / particle spacing, h/dx (–)
@@ -109,6 +110,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     scheme = water(c0, u_max=p.speed, gravity=(0.0, -p.g), newtonian=True, alpha=p.alpha, delta=p.delta,
                    shifting=p.shifting, density_filter=p.density_filter, negative_pressure=p.negative_pressure,
                    consistent_integration=p.consistent_integration, linear_consistency=p.linear_consistency,
+                   volume_consistency=p.volume_consistency,
                    spacing=p.dx, h_factor=p.h_factor)
 
     def total_energy(state) -> float:

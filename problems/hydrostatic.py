@@ -68,6 +68,7 @@ class Parameters:
     negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     consistent_integration: bool = RECOMMENDED.consistent_integration  #: the constant-only consistent nodal integration (bool)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
     frame_every: float = 0.1    #: time between VTU frames (s)
     gif: bool = False           #: render animation.gif and final.png (bool)
 
@@ -101,6 +102,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
         [water(c0, gravity=(0.0, -p.g), slip=p.slip, alpha=p.alpha, delta=p.delta, shifting=p.shifting,
                density_filter=p.density_filter, negative_pressure=p.negative_pressure,
                consistent_integration=p.consistent_integration, linear_consistency=p.linear_consistency,
+                   volume_consistency=p.volume_consistency,
                spacing=p.dx, h_factor=p.h_factor,
                extra=[ClosedVolume()] if p.lid and p.closed_volume else [])],
         t_end=p.t_end, name="hydrostatic",

@@ -75,6 +75,7 @@ class Parameters:
     t_end: float = 0.5          #: end time (s)
     alpha: float = RECOMMENDED.alpha  #: Monaghan artificial viscosity α (–)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
     c0_factor: float = 10.0     #: sound speed / sqrt(2 g H) (–)
     g: float = 9.81             #: gravitational acceleration (m/s²)
     frame_every: float = 0.05   #: time between VTU frames (s)
@@ -131,7 +132,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     return Scene(
         [water_body, _side_walls(p), riding, plate],
         [water(c0, gravity=(0.0, -p.g), alpha=p.alpha, linear_consistency=p.linear_consistency,
-               spacing=p.dx)],
+               volume_consistency=p.volume_consistency, spacing=p.dx)],
         t_end=p.t_end, name="hydrostatic_plate",
         interactions=[coupling],
         output=Output(every=p.frame_every, probe_every=0.001, gif=p.gif, png=p.gif, color_by="pressure"),

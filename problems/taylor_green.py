@@ -71,6 +71,7 @@ class Parameters:
     shifting_surface: float = 0.02   #: λ below which shifting treats a particle as at a free surface; the preset's 0.9 (–)
     consistent_integration: bool = False  #: consistent nodal integration (bool)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
     h_factor: float = 1.3            #: smoothing length / particle spacing, h/dx (–)
     basis: str = "linear"            #: MLS basis: linear or quadratic (choice)
     frame_every: float = 0.25        #: time between VTU frames (s)
@@ -124,7 +125,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     scheme = water(c0, u_max=p.speed, gravity=None, slip=None, alpha=p.alpha, flow=(p.speed, p.side),
                    newtonian=True, delta=p.delta, shifting="off", negative_pressure="allow",
                    consistent_integration=p.consistent_integration,
-                   linear_consistency=p.linear_consistency, spacing=p.dx,
+                   linear_consistency=p.linear_consistency,
+                   volume_consistency=p.volume_consistency, spacing=p.dx,
                    approximation=Approximation(h_factor=p.h_factor, basis=p.basis),
                    extra=shifting, periodic=Periodic(x=(0.0, p.side), y=(0.0, p.side)))
     return Scene(

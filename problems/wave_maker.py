@@ -116,6 +116,7 @@ class Parameters:
     density_filter: int = RECOMMENDED.density_filter  #: Shepard density filter every this many steps; 0 drops it (–)
     negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
     c0_factor: float = 10.0         #: sound speed / sqrt(g d) (–)
     h_factor: float = 1.3           #: smoothing length / particle spacing, h/dx (–)
     g: float = 9.81                 #: gravitational acceleration (m/s²)
@@ -196,7 +197,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     u_max = 0.5 * p.stroke * 2 * math.pi / p.period / math.tanh(wave_number(p.period, d, p.g) * d)
     scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
                    density_filter=p.density_filter, negative_pressure=p.negative_pressure,
-                   linear_consistency=p.linear_consistency, spacing=p.dx, h_factor=p.h_factor,
+                   linear_consistency=p.linear_consistency,
+                   volume_consistency=p.volume_consistency, spacing=p.dx, h_factor=p.h_factor,
                    extra=[sponge(p)] if p.sponge_length > 0 else [])
     return Scene(
         [water_body, tank, paddle], [scheme], t_end=p.t_end, name="wave_maker",

@@ -96,6 +96,7 @@ class Parameters:
     shifting: str = RECOMMENDED.shifting  #: particle shifting: local, design or off (choice)
     negative_pressure: str = "free_surface"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
     c0_factor: float = 10.0       #: sound speed / entry speed (–)
     g: float = 9.81               #: gravitational acceleration (m/s²)
     probe_every: float = 2.5e-4   #: time between time-series rows (s)
@@ -137,7 +138,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                                  wall_acceleration=p.wall_acceleration)
     scheme = water(c0, u_max=p.velocity, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
                    negative_pressure=p.negative_pressure, penalty_thickness=0.25 * p.dx,
-                   linear_consistency=p.linear_consistency, spacing=p.dx)
+                   linear_consistency=p.linear_consistency,
+                   volume_consistency=p.volume_consistency, spacing=p.dx)
 
     def velocity(state) -> float:
         return -float(state.body("wedge").V[1])

@@ -29,6 +29,8 @@ module                                 contents
                                        integration that meets the integration constraint
 :mod:`~mlsgalerkin.fluid.linear_consistency`  :class:`LinearConsistentPressure`: the pressure's
                                        linear part integrated exactly, with the free-surface term
+:mod:`~mlsgalerkin.fluid.volume_consistency`  :class:`VolumeConsistency`: the density relaxed
+                                       towards the particles' packing (the Shepard sum)
 :mod:`~mlsgalerkin.fluid.sponge`       :class:`SpongeZone`: a damping zone that absorbs waves
 :mod:`~mlsgalerkin.fluid.closed_volume`  :class:`ClosedVolume`: the volume balance of a closed tank
 :mod:`~mlsgalerkin.fluid.recommended`  :data:`RECOMMENDED`: the one recommended stabilisation set
@@ -97,6 +99,7 @@ from mlsgalerkin.fluid.time_step import (
     viscous_limit,
 )
 from mlsgalerkin.fluid.viscosity import BulkViscosity, NewtonianViscosity
+from mlsgalerkin.fluid.volume_consistency import VolumeConsistency
 from mlsgalerkin.fluid.walls import Walls
 from mlsgalerkin.periodic import Periodic
 
@@ -157,6 +160,7 @@ __all__ = [
     "water",
     "RECOMMENDED",
     "StabilisationSet",
+    "VolumeConsistency",
 ]
 
 

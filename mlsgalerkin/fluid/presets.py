@@ -37,6 +37,7 @@ from mlsgalerkin.fluid.recommended import RECOMMENDED, StabilisationSet
 from mlsgalerkin.fluid.scheme import FluidScheme
 from mlsgalerkin.fluid.stabilisation import stabilisation
 from mlsgalerkin.fluid.viscosity import NewtonianViscosity
+from mlsgalerkin.fluid.volume_consistency import VolumeConsistency
 from mlsgalerkin.fluid.walls import Walls
 
 __all__ = ["RECOMMENDED", "StabilisationSet", "water"]
@@ -50,7 +51,8 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
           void_memory: float = 0.0,
           penalty_thickness: float | None = None,
           consistent_integration: bool = RECOMMENDED.consistent_integration,
-          linear_consistency: bool = RECOMMENDED.linear_consistency, spacing: float | None = None,
+          linear_consistency: bool = RECOMMENDED.linear_consistency,
+          volume_consistency: float = 0.0, spacing: float | None = None,
           h_factor: float = 1.3,
           approximation: Approximation | None = None, extra: Sequence[Effect] = (), **options: Any) -> FluidScheme:
     """The recommended :class:`~mlsgalerkin.fluid.scheme.FluidScheme` for water (module docstring).
@@ -63,8 +65,10 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     ``density_filter``, ``negative_pressure``, ``penalty_thickness`` (m; the tank's penalty surface
     as a backstop, reaching one ``spacing``) and ``consistent_integration``;
     ``LinearConsistentPressure()`` if ``linear_consistency`` (the pressure's local linear fit
-    integrated exactly, with the free-surface boundary term); then ``extra``. The stabilisation
-    defaults are :data:`RECOMMENDED`.
+    integrated exactly, with the free-surface boundary term); ``VolumeConsistency(volume_consistency)``
+    if ``volume_consistency > 0`` (the density relaxed towards the particles' packing; off by
+    default until the validation tables are rerun with it, ``docs/theory/stabilisation.md`` §10);
+    then ``extra``. The stabilisation defaults are :data:`RECOMMENDED`.
 
     Parameters
     ----------
@@ -100,6 +104,8 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
                              spacing=spacing, consistent_integration=consistent_integration)
     if linear_consistency:
         effects.append(LinearConsistentPressure())
+    if volume_consistency > 0:
+        effects.append(VolumeConsistency(volume_consistency))
     effects += list(extra)
     approximation = approximation if approximation is not None else Approximation(h_factor=h_factor)
     options.setdefault("stabilisation", "as_listed")  # the list above is explicit: nothing is added to it

@@ -1,0 +1,147 @@
+"""The density relaxed towards the particles' packing (mlsgalerkin.fluid.volume_consistency):
+a fluid packed tighter than its volumes say re-expands, a lattice is left alone, the compiled
+kernel agrees with its numpy reference, and bad settings are refused before step 1."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from mlsgalerkin.approximation.build import evaluate_shape_functions
+from mlsgalerkin.fluid import FluidBody, Phase, hydrostatic_density, wall_box, water
+from mlsgalerkin.fluid.closed_volume import ClosedVolume
+from mlsgalerkin.fluid.volume_consistency import (
+    VolumeConsistency,
+    deep_particles,
+    deep_particles_reference,
+    disorder_bias_coefficient,
+    lattice_shepard_sum,
+)
+from mlsgalerkin.kernels import get_kernel
+from mlsgalerkin.scene import Scene
+from mlsgalerkin.simulation import Simulation
+
+# the squeezed tanks start packed tighter than their volumes say, which the run checks report
+pytestmark = pytest.mark.filterwarnings("ignore::mlsgalerkin.fluid.run_checks.VolumeErrorWarning",
+                                        "ignore::mlsgalerkin.fluid.run_checks.ParticleClumpingWarning")
+
+G, RHO, DX, DEPTH = 9.81, 1000.0, 0.02, 0.2
+C0 = 10 * math.sqrt(2 * G * DEPTH)
+
+
+def packed_tank(squeeze: float, effect: VolumeConsistency | None, steps: int | None = None, t_end: float = 1.0):
+    """A 0.4 m × 0.2 m tank whose water block was squeezed by ``squeeze`` towards the floor and the
+    left wall after its masses were set (so it is packed ``1/squeeze²`` tighter than its volumes
+    ``M/ρ`` say), at hydrostatic densities of its new heights; run ``steps`` steps or to ``t_end``.
+    Returns the simulation and its result."""
+    fl = FluidBody.block("water", (0.0, 0.0), (0.4, DEPTH), DX, [Phase("water", RHO)])
+    fl.positions[:] *= squeeze
+    top = DEPTH * squeeze
+    fl.density[:] = hydrostatic_density(np.full(fl.n, RHO), top - fl.positions[:, 1], G, C0)
+    walls = wall_box((0.0, 0.0), (0.4, 0.3), DX, layers=3, reference_density=RHO)
+    extra = [effect] if effect is not None else []
+    scheme = water(C0, spacing=DX, volume_consistency=0.0, extra=extra)
+    sim = Simulation(Scene([fl, walls], [scheme], t_end=t_end))
+    return sim, sim.run(max_steps=steps, progress=False)
+
+
+def test_lattice_sums():
+    # the square lattice's Shepard sum is 1 to the quadrature error of the kernel
+    assert lattice_shepard_sum("cubic_spline", 1.3, 2) == pytest.approx(1.0, abs=1e-4)
+    assert lattice_shepard_sum("quintic_spline", 1.3, 3) == pytest.approx(1.0, abs=1e-3)
+    assert lattice_shepard_sum("lucy_quartic", 1.3, 2) > 1.05      # a coarse kernel's sum is not 1
+
+
+def test_the_disorder_bias_is_taken_out():
+    # the jittered lattice's sum reads tighter than its volumes by k var(c): k = 3.4-3.7 (2D, cubic spline)
+    assert 3.3 < disorder_bias_coefficient("cubic_spline", 1.3, 2) < 4.0
+    assert 4.8 < disorder_bias_coefficient("cubic_spline", 1.3, 3) < 5.8
+    # a 1 m × 0.5 m tank at rest jittered by ± 0.15 Δx: its raw gap (about 0.6 %) is disorder, and
+    # the term stays idle
+    eff = VolumeConsistency()
+    fl = FluidBody.block("water", (0.0, 0.0), (1.0, 0.5), DX, [Phase("water", RHO)])
+    fl.positions[:] += np.random.default_rng(7).uniform(-0.15, 0.15, fl.positions.shape) * DX
+    fl.density[:] = hydrostatic_density(np.full(fl.n, RHO), 0.5 - fl.positions[:, 1], G, C0)
+    walls = wall_box((0.0, 0.0), (1.0, 0.6), DX, layers=3, reference_density=RHO)
+    sim = Simulation(Scene([fl, walls], [water(C0, spacing=DX, volume_consistency=0.0, extra=[eff])], t_end=1.0))
+    sim.run(max_steps=1, progress=False)
+    s = sim.state.fluid
+    deep = deep_particles(s.table, s.table.kernel_sum, s.n_fluid, eff.surface * eff.reference)
+    raw = s.table.kernel_sum[: s.n_fluid][deep].mean() / eff.reference - 1.0
+    assert raw > 0.004 and abs(eff.gap_mean) < 0.5 * eff.band and eff.active_evaluations == 0
+
+
+def test_a_lattice_is_left_alone_and_a_packed_fluid_gains_density():
+    rest = VolumeConsistency()
+    packed_tank(1.0, rest, steps=1)
+    assert abs(rest.gap_mean) < 1e-4                     # the lattice: measured 2e-8
+    packed = VolumeConsistency()
+    sim, _ = packed_tank(0.95, packed, steps=1)
+    assert packed.gap_mean == pytest.approx(1 / 0.95**2 - 1, rel=0.02)    # 10.8 %
+    s = sim.state.fluid
+    deep = deep_particles(s.table, s.table.kernel_sum, s.n_fluid, packed.surface * packed.reference)
+    x, y = s.x[: s.n_fluid, 0], s.x[: s.n_fluid, 1]
+    assert deep.any() and not deep[y > 0.95 * DEPTH - 2 * DX].any()     # the top two rows are not deep
+    assert not deep[(x < 2 * DX) | (y < 2 * DX)].any()                  # nor the rows that reach a wall
+    assert deep[(y > 4 * DX) & (y < 0.95 * DEPTH - 3 * DX) & (x > 4 * DX) & (x < 0.95 * 0.4 - 3 * DX)].all()
+
+
+def test_a_packed_fluid_re_expands_and_without_the_effect_it_does_not():
+    # rate 0.05: a relaxation time of 20 h/c0 = 26 ms, so the test is short
+    on = VolumeConsistency(0.05)
+    packed_tank(0.95, on, t_end=0.12)
+    off = VolumeConsistency(1e-9)                       # listed for its diagnostics, no relaxation
+    packed_tank(0.95, off, t_end=0.12)
+    assert off.gap_mean > 0.09                           # the packing stays: the continuity does not see it
+    assert abs(on.gap_mean) < 0.03                       # measured 0.43 % at 0.12 s, inside the band
+    assert on.gap_mean_largest == pytest.approx(off.gap_mean_largest, rel=0.02)
+
+
+def test_inside_the_band_the_run_is_the_run_without_the_effect():
+    # a lattice's gap is 0 to 1e-3, inside the default band (0.4 %): not a bit changes
+    eff = VolumeConsistency()
+    a = packed_tank(1.0, eff, steps=40)[1].timeseries
+    b = packed_tank(1.0, None, steps=40)[1].timeseries
+    assert eff.evaluations > 40 and eff.active_evaluations == 0
+    assert all(np.array_equal(a[k], b[k]) for k in b)
+    # without a band the same gap (below 1e-3) acts, and the run differs
+    c = packed_tank(1.0, VolumeConsistency(band=0.0), steps=40)[1].timeseries
+    assert not np.array_equal(c["kinetic_energy"], b["kinetic_energy"])
+
+
+def test_compiled_kernel_agrees_with_the_numpy_reference():
+    eff = VolumeConsistency()
+    sim, _ = packed_tank(0.97, eff, steps=30)               # disordered by the re-expansion, a free surface
+    s = sim.state.fluid
+    k = get_kernel("cubic_spline")
+    s.table = evaluate_shape_functions(s.x, s.x, s.h, s.neighbors, k, 1, kernel_sum_volumes=s.volume)
+    least = eff.surface * eff.reference
+    a = deep_particles(s.table, s.table.kernel_sum, s.n_fluid, least)
+    b = deep_particles_reference(s.table, s.table.kernel_sum, s.n_fluid, least)
+    assert np.array_equal(a, b)
+    assert 0.3 * s.n_fluid < np.count_nonzero(a) < s.n_fluid
+
+
+def test_idle_in_a_closed_tank():
+    eff = VolumeConsistency(0.05)
+    fl = FluidBody.block("water", (0.0, 0.0), (0.2, 0.1), DX, [Phase("water", RHO)])
+    fl.positions[:] *= 0.95
+    walls = wall_box((0.0, 0.0), (0.2, 0.1), DX, layers=3, reference_density=RHO)
+    sim = Simulation(Scene([fl, walls], [water(C0, spacing=DX, volume_consistency=0.0, extra=[ClosedVolume(), eff])], t_end=0.02))
+    sim.run(progress=False)
+    assert eff.idle and "ClosedVolume" in eff.summary()["idle"]
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"rate": 0.0}, "rate must be positive"),
+    ({"rate": 0.2}, "at most 0.05"),
+    ({"surface": 1.2}, "surface must be"),
+    ({"band": -0.01}, "band must be"),
+])
+def test_bad_settings_are_refused_before_step_1(kwargs, message):
+    fl = FluidBody.block("water", (0.0, 0.0), (0.2, 0.1), DX, [Phase("water", RHO)])
+    scheme = water(C0, spacing=DX, volume_consistency=0.0, extra=[VolumeConsistency(**kwargs)])
+    with pytest.raises(ValueError, match=message):
+        Simulation(Scene([fl], [scheme], t_end=0.1))
