@@ -74,7 +74,8 @@ falls the head leaves the 10 % band around Rottman & Simpson's 0.4 from above, i
 configuration. The default case runs +3.7 % (``D = 0.06`` m, ``Δρ/ρ0 = 0.5`` at 3 mm = 20 rows).
 The largest geometric-volume error is 0.1–1.2 % under the lid. With a free surface the deep case
 does not keep its volume: 3.3 and 4.8 % at 40 and 60 rows, 6.9 % at ``Δρ/ρ0 = 0.03``
-(``gravity_lid.md``); the run warns past 1 %. Pressure noise under the lid: the probes
+(``gravity_lid.md``); the run warns past 1 %. ``--set volume_consistency=0.02`` holds it (0.71 %
+at 40 rows, head +2.0 %, the fronts at 1.04; ``docs/theory/stabilisation.md`` §10). Pressure noise under the lid: the probes
 ``top_pressure_spread`` (max − min of the top row's pressure) and ``top_pressure_mean``, reported
 by ``analyse`` after 0.2 s.
 

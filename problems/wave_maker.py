@@ -41,7 +41,7 @@ depth with the sponge 3 m from the paddle (``verification/results/wave_absorptio
 2026-12-03; paddle started over one period): a bare wall 0.89 (0.81–0.98 over the windows; a perfect reflector would read 0.94 after the artificial viscosity); a one-wavelength sponge (1.2 m)
 at ``sponge_rate`` 3 / 5 / 10 reflects 0.29 / 0.13 / 0.19 (floors 0.27 / 0.12 / 0.01: at 3 the
 damping is too weak, at 10 the rise of ``σ_max = 10/s`` above ``ω = 6.3/s`` reflects a part of
-the wave itself); 0.6 m at 10: 0.14; two wavelengths (2.4 m) at 5: **0.06**, and 0.05 at 20 rows. These runs lose geometric volume against Σ M/ρ: 3–7 % by their end (not taken apart yet). The default
+the wave itself); 0.6 m at 10: 0.14; two wavelengths (2.4 m) at 5: **0.06**, and 0.05 at 20 rows. These runs lose geometric volume against Σ M/ρ: 3–7 % by their end, a compaction the continuity equation cannot see; ``--set volume_consistency=0.02`` holds it (5.0 → 0.97 % at 10 rows over 14.2 s, ``docs/theory/stabilisation.md`` §10). The default
 ``sponge_rate`` is 5; a sponge of two wavelengths is the recommendation. The start's long wave
 (at ``sqrt(g d)``, many metres long) is not absorbed by a zone this short. The walls are free-slip; the
 pressure of the piston's wall particles uses ``g − a_piston``. The gauge stands two depths from
