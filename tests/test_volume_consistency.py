@@ -145,3 +145,9 @@ def test_bad_settings_are_refused_before_step_1(kwargs, message):
     scheme = water(C0, spacing=DX, volume_consistency=0.0, extra=[VolumeConsistency(**kwargs)])
     with pytest.raises(ValueError, match=message):
         Simulation(Scene([fl], [scheme], t_end=0.1))
+
+
+def test_a_negative_rate_given_to_water_is_refused_not_dropped():
+    fl = FluidBody.block("water", (0.0, 0.0), (0.2, 0.1), DX, [Phase("water", RHO)])
+    with pytest.raises(ValueError, match="rate must be positive"):
+        Simulation(Scene([fl], [water(C0, spacing=DX, slip=None, volume_consistency=-0.01)], t_end=0.1))

@@ -66,7 +66,7 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     as a backstop, reaching one ``spacing``) and ``consistent_integration``;
     ``LinearConsistentPressure()`` if ``linear_consistency`` (the pressure's local linear fit
     integrated exactly, with the free-surface boundary term); ``VolumeConsistency(volume_consistency)``
-    if ``volume_consistency > 0`` (the density relaxed towards the particles' packing; off by
+    unless ``volume_consistency`` is 0 (the density relaxed towards the particles' packing; off by
     default until the validation tables are rerun with it, ``docs/theory/stabilisation.md`` §10);
     then ``extra``. The stabilisation defaults are :data:`RECOMMENDED`.
 
@@ -104,7 +104,7 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
                              spacing=spacing, consistent_integration=consistent_integration)
     if linear_consistency:
         effects.append(LinearConsistentPressure())
-    if volume_consistency > 0:
+    if volume_consistency != 0:     # a negative rate is listed, so the effect's check refuses it
         effects.append(VolumeConsistency(volume_consistency))
     effects += list(extra)
     approximation = approximation if approximation is not None else Approximation(h_factor=h_factor)
