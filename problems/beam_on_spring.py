@@ -104,7 +104,7 @@ class Parameters:
     shifting: str = RECOMMENDED.shifting  #: particle shifting: local, design or off (choice)
     negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
-    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
+    volume_consistency: float = RECOMMENDED.volume_consistency  #: the density relaxed towards the particles' packing at rate ε where the fluid has a free surface (0: off) (–)
     c0_factor: float = 10.0       #: sound speed / 2 sqrt(gH) (–)
     g: float = 9.81               #: gravitational acceleration (m/s²)
     probe_every: float = 1.0e-3   #: time between time-series rows (s)

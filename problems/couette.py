@@ -64,7 +64,7 @@ class Parameters:
     shifting: str = "local"          #: particle shifting: local, design or off (choice)
     consistent_integration: bool = False  #: consistent nodal integration (bool)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
-    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
+    volume_consistency: float = RECOMMENDED.volume_consistency  #: the density relaxed towards the particles' packing at rate ε where the fluid has a free surface (0: off) (–)
     h_factor: float = 1.3            #: smoothing length / particle spacing, h/dx (–)
     basis: str = "linear"            #: MLS basis: linear or quadratic (choice)
     frame_every: float = 1.0         #: time between VTU frames (s)

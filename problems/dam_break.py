@@ -62,7 +62,7 @@ class Parameters:
     shifting: str = RECOMMENDED.shifting  #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
     consistent_integration: bool = RECOMMENDED.consistent_integration  #: nodal integration that meets the integration constraint (VCI) (bool)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
-    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
+    volume_consistency: float = RECOMMENDED.volume_consistency  #: the density relaxed towards the particles' packing at rate ε where the fluid has a free surface (0: off) (–)
     negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     penalty_walls: bool = True          #: the tank's inner surface as a penalty-contact backstop (bool)
     penalty_thickness: float = 0.25     #: contact thickness of the penalty surface / dx (–)

@@ -76,7 +76,7 @@ class Parameters:
     shifting: str = RECOMMENDED.shifting  #: particle shifting: local (speed |v|), design (c0/10) or off (choice)
     consistent_integration: bool = RECOMMENDED.consistent_integration  #: nodal integration that meets the integration constraint (VCI) (bool)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
-    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
+    volume_consistency: float = RECOMMENDED.volume_consistency  #: the density relaxed towards the particles' packing at rate ε where the fluid has a free surface (0: off) (–)
     density_filter: int = RECOMMENDED.density_filter  #: Shepard density filter every this many steps; 0 drops it (–)
     negative_pressure: str = "free_surface"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     h_factor: float = 1.3          #: smoothing length / particle spacing, h/dx (–)

@@ -133,7 +133,7 @@ class Parameters:
     density_filter: int = RECOMMENDED.density_filter  #: Shepard density filter every this many steps; 0 drops it (–)
     consistent_integration: bool = RECOMMENDED.consistent_integration  #: nodal integration that meets the integration constraint (VCI) (bool)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
-    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
+    volume_consistency: float = RECOMMENDED.volume_consistency  #: the density relaxed towards the particles' packing at rate ε where the fluid has a free surface (0: off) (–)
     penalty_walls: bool = True     #: the tank's inner surface as a penalty-contact backstop (bool)
     negative_pressure: str = "allow"  #: tension treatment: allow, clamp or cavitate (choice)
     lid_pressure_factor: float = 1.0  #: pressure under the lid at the start / (rho_heavy g D), a closed tank's free level (–)

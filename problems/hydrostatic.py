@@ -68,7 +68,7 @@ class Parameters:
     negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     consistent_integration: bool = RECOMMENDED.consistent_integration  #: the constant-only consistent nodal integration (bool)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
-    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
+    volume_consistency: float = RECOMMENDED.volume_consistency  #: the density relaxed towards the particles' packing at rate ε where the fluid has a free surface (0: off) (–)
     frame_every: float = 0.1    #: time between VTU frames (s)
     gif: bool = False           #: render animation.gif and final.png (bool)
 

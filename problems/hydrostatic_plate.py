@@ -75,7 +75,7 @@ class Parameters:
     t_end: float = 0.5          #: end time (s)
     alpha: float = RECOMMENDED.alpha  #: Monaghan artificial viscosity α (–)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
-    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
+    volume_consistency: float = RECOMMENDED.volume_consistency  #: the density relaxed towards the particles' packing at rate ε where the fluid has a free surface (0: off) (–)
     c0_factor: float = 10.0     #: sound speed / sqrt(2 g H) (–)
     g: float = 9.81             #: gravitational acceleration (m/s²)
     frame_every: float = 0.05   #: time between VTU frames (s)

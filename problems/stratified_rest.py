@@ -94,7 +94,7 @@ class Parameters:
     negative_pressure: str = "allow"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     consistent_integration: bool = RECOMMENDED.consistent_integration  #: nodal integration that meets the integration constraint (VCI) (bool)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
-    volume_consistency: float = 0.0  #: the density relaxed towards the particles' packing at rate ε, e.g. 0.02 (0: off) (–)
+    volume_consistency: float = RECOMMENDED.volume_consistency  #: the density relaxed towards the particles' packing at rate ε where the fluid has a free surface (0: off) (–)
     lid: bool = True               #: rigid lid on top; false: a free surface (bool)
     closed_volume: bool = True     #: with the lid: hold the closed tank's volume in the continuity equation (ClosedVolume) (bool)
     h_factor: float = 1.3          #: smoothing length / particle spacing, h/dx (–)

@@ -60,7 +60,7 @@ def cases(quick: bool) -> list[tuple[str, str, dict]]:
     out += [("wave_maker", f"{n} rows", {"dx": 0.2 / n}) for n in (20, 30)]
     out += [("wave_maker", "20 rows, former set", {"dx": 0.01, "alpha": 0.1, "delta": 0.0, "shifting": "off",
                                                     "density_filter": 20, "negative_pressure": "allow",
-                                                    "linear_consistency": False})]
+                                                    "linear_consistency": False, "volume_consistency": 0.0})]
     return out
 
 

@@ -52,7 +52,7 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
           penalty_thickness: float | None = None,
           consistent_integration: bool = RECOMMENDED.consistent_integration,
           linear_consistency: bool = RECOMMENDED.linear_consistency,
-          volume_consistency: float = 0.0, spacing: float | None = None,
+          volume_consistency: float = RECOMMENDED.volume_consistency, spacing: float | None = None,
           h_factor: float = 1.3,
           approximation: Approximation | None = None, extra: Sequence[Effect] = (), **options: Any) -> FluidScheme:
     """The recommended :class:`~mlsgalerkin.fluid.scheme.FluidScheme` for water (module docstring).
@@ -66,8 +66,8 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     as a backstop, reaching one ``spacing``) and ``consistent_integration``;
     ``LinearConsistentPressure()`` if ``linear_consistency`` (the pressure's local linear fit
     integrated exactly, with the free-surface boundary term); ``VolumeConsistency(volume_consistency)``
-    unless ``volume_consistency`` is 0 (the density relaxed towards the particles' packing; off by
-    default until the validation tables are rerun with it, ``docs/theory/stabilisation.md`` §10);
+    unless ``volume_consistency`` is 0 (the density relaxed towards the particles' packing where the
+    fluid has a free surface, ``docs/theory/stabilisation.md`` §10);
     then ``extra``. The stabilisation defaults are :data:`RECOMMENDED`.
 
     Parameters

@@ -7,8 +7,10 @@ gets it added (``stabilisation="auto"``, the default; ``summary.json`` says what
 
 >>> RECOMMENDED.alpha, RECOMMENDED.delta, RECOMMENDED.shifting, RECOMMENDED.linear_consistency
 (0.02, 0.1, 'local', True)
+>>> RECOMMENDED.volume_consistency
+0.02
 >>> [type(e).__name__ for e in recommended_stabilisation()]
-['MonaghanViscosity', 'DensityDiffusion', 'ParticleShifting', 'LinearConsistentPressure']
+['MonaghanViscosity', 'DensityDiffusion', 'ParticleShifting', 'LinearConsistentPressure', 'VolumeConsistency']
 
 An effect is *stabilising* when its class says ``stabilising = True``: numerical terms that keep
 the particle method stable and accurate (artificial viscosity, density diffusion or filtering,
@@ -26,6 +28,7 @@ from mlsgalerkin.fluid.effect import Effect
 from mlsgalerkin.fluid.linear_consistency import LinearConsistentPressure
 from mlsgalerkin.fluid.pair_viscosity import MonaghanViscosity
 from mlsgalerkin.fluid.shifting import ParticleShifting
+from mlsgalerkin.fluid.volume_consistency import VolumeConsistency
 
 __all__ = ["RECOMMENDED", "STABILISATION_MODES", "StabilisationSet", "is_stabilising", "missing_from_recommended",
            "recommended_stabilisation"]
@@ -43,7 +46,9 @@ class StabilisationSet:
     reported with the Reynolds number it implies), ``delta`` the δ-SPH density diffusion (–),
     ``shifting`` one of ``"local"``, ``"design"``, ``"off"``, ``density_filter`` a Shepard
     filter every this many steps (0: none), ``consistent_integration`` the constant-only VCI,
-    ``linear_consistency`` the pressure's linear fit integrated exactly.
+    ``linear_consistency`` the pressure's linear fit integrated exactly, ``volume_consistency``
+    the rate ε at which the density relaxes towards the particles' packing where the fluid has a
+    free surface (–; 0: off; :class:`~mlsgalerkin.fluid.volume_consistency.VolumeConsistency`).
     """
 
     alpha: float = 0.02
@@ -52,6 +57,7 @@ class StabilisationSet:
     density_filter: int = 0
     consistent_integration: bool = False
     linear_consistency: bool = True
+    volume_consistency: float = 0.02
 
     def as_dict(self) -> dict[str, Any]:
         """The set as keyword arguments of :func:`~mlsgalerkin.fluid.presets.water`."""
@@ -66,9 +72,10 @@ RECOMMENDED = StabilisationSet()
 def recommended_stabilisation() -> list[Effect]:
     """The stabilising effects of :data:`RECOMMENDED`, in the order :func:`water` lists them:
     ``MonaghanViscosity(α)``, ``DensityDiffusion(δ)``, ``ParticleShifting("local")``,
-    ``LinearConsistentPressure()``."""
+    ``LinearConsistentPressure()``, ``VolumeConsistency(ε)``."""
     return [MonaghanViscosity(RECOMMENDED.alpha), DensityDiffusion(RECOMMENDED.delta),
-            ParticleShifting(RECOMMENDED.shifting), LinearConsistentPressure()]
+            ParticleShifting(RECOMMENDED.shifting), LinearConsistentPressure(),
+            VolumeConsistency(RECOMMENDED.volume_consistency)]
 
 
 def is_stabilising(effect: object) -> bool:

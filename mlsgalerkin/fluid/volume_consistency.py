@@ -213,6 +213,7 @@ class VolumeConsistency(Effect):
         self.rate, self.band, self.surface = float(rate), float(band), float(surface)
         self.evaluations = 0
         self.active_evaluations = 0
+        self.surface_evaluations = 0
         self.reference = math.nan
         self.bias = math.nan
         self.c0 = math.nan
@@ -255,30 +256,38 @@ class VolumeConsistency(Effect):
             raise ValueError("VolumeConsistency: the shape-function table carries no Shepard sums (the solver "
                              "fills them when an effect reads 'kernel_sum')")
         nf = s.n_fluid
-        deep = deep_particles(t, t.kernel_sum, nf, self.surface * self.reference)
+        least = self.surface * self.reference
+        self.evaluations += 1
+        if nf == 0 or float(t.kernel_sum[:nf].min()) >= least:
+            return                          # no free surface: the fluid fills its domain, whose volume is fixed
+        self.surface_evaluations += 1
+        deep = deep_particles(t, t.kernel_sum, nf, least)
         rate, self.gap_mean = volume_consistency_rate(t.kernel_sum, s.rho, s.h, deep, reference=self.reference,
                                                       rate=self.rate, c0=self.c0, band=self.band, bias=self.bias)
         if rate is not None:
             s.drho[s.fluid] += rate
             self.active_evaluations += 1
-        self.evaluations += 1
         if abs(self.gap_mean) > abs(self.gap_mean_largest):
             self.gap_mean_largest = self.gap_mean
 
     def summary(self) -> dict[str, Any]:
         if self.idle:
             return {"rate": self.rate, "idle": "ClosedVolume holds the closed tank's volume"}
+        if self.evaluations and not self.surface_evaluations:
+            return {"rate": self.rate, "idle": "no free surface: the fluid fills its domain, whose volume is fixed"}
         return {"rate": self.rate, "band": self.band, "surface": self.surface,
                 "lattice_shepard_sum": self.reference, "disorder_bias_coefficient": self.bias,
                 "relaxation_time_s": self._h / (self.rate * self.c0) if self.c0 > 0 else None,
                 "packing_gap_mean_at_end": self.gap_mean, "packing_gap_mean_largest": self.gap_mean_largest,
-                "active_share": self.active_evaluations / self.evaluations if self.evaluations else 0.0}
+                "active_share": self.active_evaluations / self.evaluations if self.evaluations else 0.0,
+                "free_surface_share": self.surface_evaluations / self.evaluations if self.evaluations else 0.0}
 
     def state_dict(self) -> dict[str, Any]:
         return {"gap_mean_largest": self.gap_mean_largest, "evaluations": self.evaluations,
-                "active_evaluations": self.active_evaluations}
+                "active_evaluations": self.active_evaluations, "surface_evaluations": self.surface_evaluations}
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
         self.gap_mean_largest = float(d.get("gap_mean_largest", 0.0))
         self.evaluations = int(d.get("evaluations", 0))
         self.active_evaluations = int(d.get("active_evaluations", 0))
+        self.surface_evaluations = int(d.get("surface_evaluations", self.evaluations))
