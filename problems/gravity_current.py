@@ -66,16 +66,16 @@ at 40 rows) but the geometric volume drifts (2.7 % at 40 rows) and an impact gai
 cure is a nodal integration that is linearly exact and conserves energy at once, not yet built
 (a prototype runs the fronts alike, 0.99 at 20 rows with the head at −7.3 %, but leaves the
 pairing modes of nodal integration unresisted: ``docs/theory/stabilisation.md`` §7).
-With a free surface at ``Δρ/ρ0 = 0.1`` the two fronts run alike (1.07 and 1.01 at 40 and 60 rows)
-and approach the energy-conserving 0.5 (Froude numbers 0.41 and 0.46: +3.3 and +15.1 % against
+With a free surface at ``Δρ/ρ0 = 0.1`` the two fronts run alike (1.03 and 1.00 at 40 and 60 rows)
+and approach the energy-conserving 0.5 (Froude numbers 0.42 and 0.48: +4.0 and +20.3 % against
 the formula's 0.4): Shin, Dalziel & Linden (2004) measure lock-exchange currents a few per cent
 under 0.5 at high Reynolds numbers (here ``v_h D/ν ≈ 2·10⁴``), so as the numerical viscosity
 falls the head leaves the 10 % band around Rottman & Simpson's 0.4 from above, in either
-configuration. The default case runs +3.7 % (``D = 0.06`` m, ``Δρ/ρ0 = 0.5`` at 3 mm = 20 rows).
+configuration. The default case runs +3.6 % (``D = 0.06`` m, ``Δρ/ρ0 = 0.5`` at 3 mm = 20 rows).
 The largest geometric-volume error is 0.1–1.2 % under the lid. With a free surface the deep case
-does not keep its volume: 3.3 and 4.8 % at 40 and 60 rows, 6.9 % at ``Δρ/ρ0 = 0.03``
-(``gravity_lid.md``); the run warns past 1 %. ``--set volume_consistency=0.02`` holds it (0.71 %
-at 40 rows, head +2.0 %, the fronts at 1.04; ``docs/theory/stabilisation.md`` §10). Pressure noise under the lid: the probes
+keeps its volume through the recommended set's volume consistency: 0.71 and 0.68 % at 40 and 60
+rows, 0.77 % at ``Δρ/ρ0 = 0.03`` (3.3, 4.8 and 6.9 % with ``--set volume_consistency=0``;
+``gravity_lid.md``, ``docs/theory/stabilisation.md`` §10); the run warns past 1 %. Pressure noise under the lid: the probes
 ``top_pressure_spread`` (max − min of the top row's pressure) and ``top_pressure_mean``, reported
 by ``analyse`` after 0.2 s.
 

@@ -41,7 +41,7 @@ depth with the sponge 3 m from the paddle (``verification/results/wave_absorptio
 2026-12-03; paddle started over one period): a bare wall 0.89 (0.81–0.98 over the windows; a perfect reflector would read 0.94 after the artificial viscosity); a one-wavelength sponge (1.2 m)
 at ``sponge_rate`` 3 / 5 / 10 reflects 0.29 / 0.13 / 0.19 (floors 0.27 / 0.12 / 0.01: at 3 the
 damping is too weak, at 10 the rise of ``σ_max = 10/s`` above ``ω = 6.3/s`` reflects a part of
-the wave itself); 0.6 m at 10: 0.14; two wavelengths (2.4 m) at 5: **0.06**, and 0.05 at 20 rows. These runs lose geometric volume against Σ M/ρ: 3–7 % by their end, a compaction the continuity equation cannot see; ``--set volume_consistency=0.02`` holds it (5.0 → 0.97 % at 10 rows over 14.2 s, ``docs/theory/stabilisation.md`` §10). The default
+the wave itself); 0.6 m at 10: 0.14; two wavelengths (2.4 m) at 5: **0.06**, and 0.05 at 20 rows. Without the recommended set's volume consistency (``--set volume_consistency=0``) these runs lose geometric volume against Σ M/ρ, 3–7 % by their end, a compaction the continuity equation cannot see; with it, the default, the 10-row run keeps 0.97 % over 14.2 s (5.0 % without; ``docs/theory/stabilisation.md`` §10). The default
 ``sponge_rate`` is 5; a sponge of two wavelengths is the recommendation. The start's long wave
 (at ``sqrt(g d)``, many metres long) is not absorbed by a zone this short. The walls are free-slip; the
 pressure of the piston's wall particles uses ``g − a_piston``. The gauge stands two depths from
@@ -51,11 +51,13 @@ little to the artificial viscosity, which acts as a kinematic viscosity ``ν ≈
 Lamb 1932, so by about ``1 − exp(−2νk² x_p/c_g)`` between paddle and gauge:
 ``viscous_decay_to_gauge``; the wave Reynolds number ``ω/(νk²)`` is reported too).
 Settings: the one recommended set (``mlsgalerkin.fluid.RECOMMENDED``: α = 0.02, density
-diffusion, shifting, the pressure's linear fit integrated exactly), tension released by
-cavitation. Measured at the defaults (``verification/results/fluid_validation/summary.md``,
-2026-12-02): the wave height is 19.92 mm against 20.30 mm, −1.9 %, at 20 rows per depth
-(``Δx = 0.01`` m) and 20.24 mm, −0.3 %, at 30 rows, both within 5 %, with a second harmonic of
-10.5 and 9.8 % of the first (wave Reynolds numbers 514 and 771). Before the linear consistency's
+diffusion, shifting, the pressure's linear fit integrated exactly, the volume consistency),
+tension released by cavitation. Measured at the defaults
+(``verification/results/fluid_validation/summary.md``, 2026-12-03): the wave height is 19.68 mm
+against 20.30 mm, −3.1 %, at 20 rows per depth (``Δx = 0.01`` m) and 20.34 mm, +0.2 %, at 30
+rows, both within 5 %, with a second harmonic of 10.6 and 9.8 % of the first (wave Reynolds
+numbers 514 and 771) and the geometric volume within 0.35 and 0.40 %; without the volume
+consistency (2026-12-02) −1.9 and −0.3 %, volume within 0.64 and 0.96 %. Before the linear consistency's
 surface fix of 2026-12-02 they were −3.8 and +7.2 % (the 30 rows outside the 5 %); at 10 rows
 −5.9 % (``verification/results/quiet_state/investigation.md`` §8, before the fix). The former set
 (α = 0.1, a Shepard filter, no density diffusion or shifting, direct nodal integration; α = 0.02

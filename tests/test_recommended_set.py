@@ -22,6 +22,7 @@ from mlsgalerkin.fluid import (
     ParticleShifting,
     Phase,
     TaitPressure,
+    VolumeConsistency,
     Walls,
     hydrostatic_density,
     wall_box,
@@ -65,7 +66,7 @@ def test_every_fluid_problem_scene_runs_the_recommended_effects():
         module = load_problem(name)
         scene = module.make_scene(module.Parameters(**getattr(module, "SMOKE", {})))
         names = _names(next(sc for sc in scene.schemes if isinstance(sc, FluidScheme)).effects)
-        assert "LinearConsistentPressure" in names, name
+        assert "LinearConsistentPressure" in names and "VolumeConsistency" in names, name
         assert "DensityDiffusion" in names and "ParticleShifting" in names or name == "taylor_green", name
         assert "DensityFilter" not in names and "ConsistentIntegration" not in names, name
 
@@ -74,9 +75,10 @@ def test_water_builds_exactly_the_recommended_set_without_warning():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         scheme = water(20.0)
-        bare = water(20.0, alpha=0.0, delta=0.0, shifting="off", linear_consistency=False)
+        bare = water(20.0, alpha=0.0, delta=0.0, shifting="off", linear_consistency=False, volume_consistency=0.0)
     assert _names(scheme.effects)[3:] == ["MonaghanViscosity", "DensityDiffusion", "ParticleShifting",
-                                          "LinearConsistentPressure"]
+                                          "LinearConsistentPressure", "VolumeConsistency"]
+    assert scheme.effects[-1].rate == RECOMMENDED.volume_consistency
     assert scheme.stabilisation == "as_listed" and scheme.added_stabilisation == []
     assert _names(bare.effects) == ["TaitPressure", "Gravity", "Walls"]  # an ablation stays an ablation
 
@@ -84,25 +86,26 @@ def test_water_builds_exactly_the_recommended_set_without_warning():
 def test_a_scheme_without_stabilisation_gets_the_recommended_set():
     scheme = FluidScheme([TaitPressure(20.0), Gravity((0.0, -9.81))])
     assert _names(scheme.effects) == ["TaitPressure", "Gravity", "MonaghanViscosity", "DensityDiffusion",
-                                      "ParticleShifting", "LinearConsistentPressure"]
+                                      "ParticleShifting", "LinearConsistentPressure", "VolumeConsistency"]
     report = scheme.stabilisation_report()
-    assert report["mode"] == "auto" and len(report["added"]) == 4 and report["missing_from_recommended"] == []
+    assert report["mode"] == "auto" and len(report["added"]) == 5 and report["missing_from_recommended"] == []
     assert scheme.effects[2].alpha == RECOMMENDED.alpha and scheme.effects[3].delta == RECOMMENDED.delta
     assert "MonaghanViscosity" in " ".join(scheme.identity()["effects"])  # a restart sees what ran
 
 
 def test_part_of_the_set_is_warned_and_as_listed_is_exact():
     listed = [TaitPressure(20.0), Walls(), MonaghanViscosity(0.1), DensityFilter(20)]
-    with pytest.warns(PartialStabilisationWarning, match="DensityDiffusion, ParticleShifting, LinearConsistentPressure"):
+    with pytest.warns(PartialStabilisationWarning, match="DensityDiffusion, ParticleShifting, LinearConsistentPressure, VolumeConsistency"):
         scheme = FluidScheme(list(listed))
     assert _names(scheme.effects) == _names(listed)
     assert scheme.stabilisation_report()["missing_from_recommended"] == ["DensityDiffusion", "ParticleShifting",
-                                                                         "LinearConsistentPressure"]
+                                                                         "LinearConsistentPressure",
+                                                                         "VolumeConsistency"]
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         exact = FluidScheme([TaitPressure(20.0)], stabilisation="as_listed")
         full = FluidScheme([TaitPressure(20.0), MonaghanViscosity(0.02), DensityDiffusion(), ParticleShifting(),
-                            LinearConsistentPressure()])
+                            LinearConsistentPressure(), VolumeConsistency()])
     assert _names(exact.effects) == ["TaitPressure"]
     assert full.stabilisation_report()["missing_from_recommended"] == []
 
@@ -124,7 +127,7 @@ def test_summary_says_what_was_added(tmp_path):
     stab = json.loads((tmp_path / "run" / "summary.json").read_text())["fluid"]["stabilisation"]
     assert stab["mode"] == "auto"
     assert [a.split("(")[0] for a in stab["added"]] == ["MonaghanViscosity", "DensityDiffusion", "ParticleShifting",
-                                                         "LinearConsistentPressure"]
+                                                         "LinearConsistentPressure", "VolumeConsistency"]
 
 
 def test_recommended_set_is_frozen():

@@ -209,7 +209,7 @@ def test_the_scene_before_schemes_runs_with_a_warning_that_shows_the_new_form():
     # the old form lists no stabilisation either: it gets the recommended set, like a scheme
     assert [type(e).__name__ for e in fluid.effects] == ["TaitPressure", "Gravity", "Walls", "MonaghanViscosity",
                                                          "DensityDiffusion", "ParticleShifting",
-                                                         "LinearConsistentPressure"]
+                                                         "LinearConsistentPressure", "VolumeConsistency"]
     with pytest.warns(DeprecationWarning, match="FluidScheme"):
         assert old.effects is fluid.effects and old.dt_max == 1e-4   # old attribute reads still work
     new = Scene(old.bodies, [FluidScheme(list(fluid.effects), approximation=Approximation(h_factor=1.5),
@@ -258,7 +258,7 @@ def test_water_preset_is_the_recommended_set():
     scheme = fluid_mod.water(20.0, spacing=0.01, penalty_thickness=0.0025)
     assert [type(e).__name__ for e in scheme.effects] == [
         "TaitPressure", "Gravity", "Walls", "MonaghanViscosity", "DensityDiffusion", "ParticleShifting", "PenaltyWalls",
-        "LinearConsistentPressure"]
+        "LinearConsistentPressure", "VolumeConsistency"]
     pressure, _, _, viscosity, diffusion, *_ = scheme.effects
     assert pressure.c0 == 20.0 and pressure.negative_pressure == "cavitate"
     assert viscosity.alpha == 0.02 and diffusion.delta == 0.1

@@ -151,3 +151,35 @@ def test_a_negative_rate_given_to_water_is_refused_not_dropped():
     fl = FluidBody.block("water", (0.0, 0.0), (0.2, 0.1), DX, [Phase("water", RHO)])
     with pytest.raises(ValueError, match="rate must be positive"):
         Simulation(Scene([fl], [water(C0, spacing=DX, slip=None, volume_consistency=-0.01)], t_end=0.1))
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+def test_acts_only_where_the_fluid_has_a_free_surface(periodic):
+    # a block squeezed by 0.95 after its masses were set: its deep particles read a gap of 10.8 %.
+    # In a periodic box of the squeezed side it fills its domain (no free surface: the effect
+    # waits); the same block in open space has a free surface all round, and the effect acts
+    from mlsgalerkin.periodic import Periodic
+    side, dx = 0.95 * 0.4, 0.025
+    fl = FluidBody.block("water", (0.0, 0.0), (0.4, 0.4), dx, [Phase("water", RHO)])
+    fl.positions[:] *= 0.95
+    eff = VolumeConsistency()
+    scheme = water(10.0, gravity=None, slip=None, spacing=dx, negative_pressure="allow", volume_consistency=0.0,
+                   extra=[eff], periodic=Periodic(x=(0.0, side), y=(0.0, side)) if periodic else None)
+    Simulation(Scene([fl], [scheme], t_end=1.0)).run(max_steps=3, progress=False)
+    report = eff.summary()
+    assert eff.evaluations >= 3
+    if periodic:
+        assert eff.active_evaluations == 0 and "no free surface" in report["idle"]
+    else:
+        assert eff.active_evaluations == eff.evaluations and report["free_surface_share"] == 1.0
+        assert report["packing_gap_mean_at_end"] == pytest.approx(1 / 0.95**2 - 1, rel=0.05)
+
+
+def test_every_fluid_problem_lists_it_and_zero_leaves_it_out():
+    from mlsgalerkin.fluid.scheme import FluidScheme
+    from mlsgalerkin.problem import load_problem
+    module = load_problem("dam_break")
+    for rate, listed in ((None, True), (0.0, False)):
+        params = module.Parameters(**getattr(module, "SMOKE", {}), **({} if rate is None else {"volume_consistency": rate}))
+        scheme = next(sc for sc in module.make_scene(params).schemes if isinstance(sc, FluidScheme))
+        assert any(isinstance(e, VolumeConsistency) for e in scheme.effects) is listed

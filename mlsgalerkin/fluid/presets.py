@@ -7,7 +7,7 @@ place, so every problem runs the same numerics unless it says otherwise:
 >>> scheme = water(c0=20.0, spacing=0.01)
 >>> [type(e).__name__ for e in scheme.effects]  # doctest: +NORMALIZE_WHITESPACE
 ['TaitPressure', 'Gravity', 'Walls', 'MonaghanViscosity', 'DensityDiffusion', 'ParticleShifting',
- 'LinearConsistentPressure']
+ 'LinearConsistentPressure', 'VolumeConsistency']
 >>> scheme.spacing, scheme.approximation.h_factor
 (0.01, 1.3)
 
@@ -15,7 +15,9 @@ The defaults are :data:`RECOMMENDED`, the one numerical set every shipped fluid 
 Monaghan's pair viscosity ``α = 0.02``, density diffusion ``δ = 0.1`` (Antuono et al. 2010),
 particle shifting at each particle's own speed (Skillen et al. 2013), no density filter, the
 pressure's local linear fit integrated exactly with the free-surface boundary term
-(:class:`~mlsgalerkin.fluid.linear_consistency.LinearConsistentPressure`), and a cubic-spline
+(:class:`~mlsgalerkin.fluid.linear_consistency.LinearConsistentPressure`), the density relaxed
+towards the particles' packing where the fluid has a free surface at ``ε = 0.02``
+(:class:`~mlsgalerkin.fluid.volume_consistency.VolumeConsistency`), and a cubic-spline
 MLS approximation with ``h = 1.3 Δx``. Tension released by cavitation (the density floored at the
 rest density) is the default model of a liquid against air; a problem whose physics differs
 (a closed tank, a surface that separates) says so (``docs/theory/stabilisation.md`` has what

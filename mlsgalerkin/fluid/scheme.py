@@ -18,7 +18,7 @@ part of it is warned; ``stabilisation="as_listed"`` runs exactly the list:
 >>> [type(e).__name__ for e in FluidScheme([TaitPressure(20.0), Gravity((0.0, -9.81))]).effects]
 ... # doctest: +NORMALIZE_WHITESPACE
 ['TaitPressure', 'Gravity', 'MonaghanViscosity', 'DensityDiffusion', 'ParticleShifting',
- 'LinearConsistentPressure']
+ 'LinearConsistentPressure', 'VolumeConsistency']
 >>> len(FluidScheme([TaitPressure(20.0)], stabilisation="as_listed").effects)
 1
 """
