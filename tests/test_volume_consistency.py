@@ -175,7 +175,7 @@ def test_acts_only_where_the_fluid_has_a_free_surface(periodic):
         assert report["packing_gap_mean_at_end"] == pytest.approx(1 / 0.95**2 - 1, rel=0.05)
 
 
-def test_every_fluid_problem_lists_it_and_zero_leaves_it_out():
+def test_a_problem_lists_it_by_default_and_zero_leaves_it_out():
     from mlsgalerkin.fluid.scheme import FluidScheme
     from mlsgalerkin.problem import load_problem
     module = load_problem("dam_break")
