@@ -14,6 +14,7 @@ from mlsgalerkin.fluid.distribution import (
     geometric_volume,
     pair_statistics,
     pair_statistics_reference,
+    volume_error,
 )
 from mlsgalerkin.neighbors import find_neighbors
 
@@ -183,3 +184,12 @@ def test_occupancy_numba_matches_scipy(dim, rng):
     grid, _ = occupancy(x, DX)
     ref = occupancy_reference(x, DX)
     assert grid.shape == ref.shape and np.array_equal(grid, ref)
+
+
+def test_the_volume_error_compares_the_cells_with_the_masses_over_the_densities():
+    x = lattice((0.0, 0.0), (0.4, 0.2), DX)
+    M = np.full(x.shape[0], 1000.0 * DX**2)
+    vgeo, err = volume_error(x, M, np.full(x.shape[0], 1000.0), DX)
+    assert vgeo == pytest.approx(0.08, rel=1e-12) and abs(err) < 1e-12
+    assert volume_error(x, M, np.full(x.shape[0], 1100.0), DX)[1] == pytest.approx(0.1, rel=1e-12)  # too dense: voids
+    assert volume_error(x[:0], M[:0], M[:0], DX) == (0.0, 0.0)

@@ -84,6 +84,7 @@ __all__ = [
     "occupancy_reference",
     "pair_statistics",
     "pair_statistics_reference",
+    "volume_error",
 ]
 
 #: Pixels per spacing ``k`` of the grid the union of cells is measured on.
@@ -399,3 +400,15 @@ def pair_statistics_reference(indptr, indices, x, n_fluid, spacing, clump_distan
     min_fw = np.array([r2[fw].min()]) if fw.any() else np.array([np.inf])
     clumped = np.array([np.count_nonzero(r2[ff] < (clump_distance * spacing) ** 2)])
     return _statistics(min_ff, clumped, min_fw, spacing)
+
+
+def volume_error(x: NDArray[np.float64], M: NDArray[np.float64], rho: NDArray[np.float64],
+                 spacing: float) -> tuple[float, float]:
+    """The geometric volume ``V_geo`` (m^d) of the particles at ``x (n, d)`` (m; :func:`geometric_volume`)
+    and its **volume error** ``V_geo / Σ M/ρ − 1`` (–) against the volume their masses ``M (n,)``
+    (kg/m^(3−d)) and densities ``ρ (n,)`` say; ``(0, 0)`` without particles. Positive: the particles
+    stand farther apart than their volumes say (voids, a loose packing); negative: tighter."""
+    if x.shape[0] == 0:
+        return 0.0, 0.0
+    vgeo = geometric_volume(x, spacing)
+    return vgeo, vgeo / float(np.sum(M / rho)) - 1.0

@@ -54,7 +54,8 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
           penalty_thickness: float | None = None,
           consistent_integration: bool = RECOMMENDED.consistent_integration,
           linear_consistency: bool = RECOMMENDED.linear_consistency,
-          volume_consistency: float = RECOMMENDED.volume_consistency, spacing: float | None = None,
+          volume_consistency: float = RECOMMENDED.volume_consistency, loose_band: float = 0.0,
+          spacing: float | None = None,
           h_factor: float = 1.3,
           approximation: Approximation | None = None, extra: Sequence[Effect] = (), **options: Any) -> FluidScheme:
     """The recommended :class:`~mlsgalerkin.fluid.scheme.FluidScheme` for water (module docstring).
@@ -69,7 +70,8 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     ``LinearConsistentPressure()`` if ``linear_consistency`` (the pressure's local linear fit
     integrated exactly, with the free-surface boundary term); ``VolumeConsistency(volume_consistency)``
     unless ``volume_consistency`` is 0 (the density relaxed towards the particles' packing where the
-    fluid has a free surface, ``docs/theory/stabilisation.md`` §10);
+    fluid has a free surface, ``docs/theory/stabilisation.md`` §10), with its loose side past the
+    volume error ``loose_band`` (0, the default: off);
     then ``extra``. The stabilisation defaults are :data:`RECOMMENDED`.
 
     Parameters
@@ -91,6 +93,9 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
         ``integrator``, ``mass``, ``safety``, ``dt_max``, ``periodic`` of the scheme
         (``stabilisation`` is ``"as_listed"``: the effects above are exactly what is asked for).
     """
+    if loose_band and volume_consistency == 0:
+        raise ValueError(f"water(loose_band={loose_band:g}) is the volume consistency's loose side, which "
+                         "volume_consistency=0 leaves out: give volume_consistency > 0 (the default) or loose_band=0")
     effects: list[Effect] = [TaitPressure(c0, u_max=u_max, negative_pressure=negative_pressure,
                                           void_memory=void_memory)]
     if gravity is not None:
@@ -107,7 +112,7 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     if linear_consistency:
         effects.append(LinearConsistentPressure())
     if volume_consistency != 0:     # a negative rate is listed, so the effect's check refuses it
-        effects.append(VolumeConsistency(volume_consistency))
+        effects.append(VolumeConsistency(volume_consistency, loose_band=loose_band))
     effects += list(extra)
     approximation = approximation if approximation is not None else Approximation(h_factor=h_factor)
     options.setdefault("stabilisation", "as_listed")  # the list above is explicit: nothing is added to it

@@ -51,7 +51,7 @@ from typing import Any
 
 import numpy as np
 
-from mlsgalerkin.fluid.distribution import CLUMP_DISTANCE, geometric_volume, pair_statistics
+from mlsgalerkin.fluid.distribution import CLUMP_DISTANCE, pair_statistics, volume_error
 from mlsgalerkin.fluid.domain_exit import OUTSIDE
 from mlsgalerkin.fluid.eos import MachNumberWarning
 from mlsgalerkin.fluid.state import FluidState
@@ -141,9 +141,7 @@ class FluidRunChecks:
         out_rows = s.extra.get(OUTSIDE)
         inside = ~out_rows[f] if out_rows is not None else np.ones(s.n_fluid, dtype=bool)
         if inside.any():    # the particles taken out of the run (domain_exit) are left out
-            vgeo = geometric_volume(s.x[f][inside], s.spacing)
-            vmass = float(np.sum(s.M[f][inside] / s.rho[f][inside]))
-            err = vgeo / vmass - 1.0
+            vgeo, err = volume_error(s.x[f][inside], s.M[f][inside], s.rho[f][inside], s.spacing)
             out["geometric_volume"] = vgeo
             out["volume_error"] = err
             self._record_volume(s, err)
