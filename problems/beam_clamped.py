@@ -23,13 +23,18 @@ spectrum from half a period after the first impact to the end (4 s by default, s
 Measured at the defaults (one thread, 1050 s): tip period 0.6061 s (+1.5 % on the source),
 largest tip deflection 21.0 mm. Seven splash particles (0.56 % of the mass) fly over the tank's
 walls between 0.44 and 2.08 s and are taken out of the run (``summary.json`` →
-``fluid.domain_exit``). **The geometric volume reads up to +6.6 % (+4.8 % at 4 s), outside the
-1 % goal.** The cavitation floor (``negative_pressure="cavitate"``) forgets the expansion of the
-splash, and the water that settles keeps a loose upper layer. Each other tension model measured
-on this problem diverges or does worse (``docs/theory/stabilisation.md`` §3). With
-``--set void_memory=0.2`` (the floor remembers part of the expansion) the largest volume error is
-3.0 % and the period 0.5858 s (−1.9 %); not the default, because it raises the pressure noise of
-the dam break with impact.
+``fluid.domain_exit``). **The geometric volume reads up to 6.52 % (+5.60 % at 4 s), outside the
+1 % goal** (measured 2026-12-03 with the volume consistency). The particles spread near the surface
+at the density their continuity gives them (``Σ M/ρ`` holds; the geometric volume grows): water
+thrown up and recompressed after the cavitation floor cut its expansion stands 1.5–2 spacings apart,
+held up by its own pressure, and the deep mean of the volume consistency does not see it
+(``docs/theory/stabilisation.md`` §10). ``--set loose_band=0.005`` adds the volume consistency's
+loose side, which relaxes those particles' density while the fluid's volume error is past 0.5 %:
+largest volume error 2.05 % (at the splash's landing, 1.2 s), 0.87 % on average after 1.5 s,
++0.69 % at 4 s; tip period 0.6045 s (+1.2 %), largest tip deflection 23.1 mm. Not the default
+until the other problems' tables are rerun with it. ``--set void_memory=0.2`` (the floor remembers
+part of the expansion) gave 3.0 % before the volume consistency joined the set (period 0.5858 s,
+−1.9 %); it raises the pressure noise of the dam break with impact.
 """
 
 from __future__ import annotations

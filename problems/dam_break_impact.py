@@ -33,10 +33,11 @@ Measured at the defaults (``verification/results/fluid_core/impact.md``, ``H = 0
 ``H/Δx = 40`` (+9.8 %) and 2.89 at ``T = 2.41`` at ``H/Δx = 80`` (+11.6 %) against 2.59 at 2.42;
 the raw peak 7.12 and 6.05; the RMS deviation of P1–P4 0.300 / 0.463 / 0.188 / 0.170 and 0.190 /
 0.214 / 0.153 / 0.150, falling with resolution at every sensor; the geometric volume within 0.68
-and 0.38 %; no particle behind a wall. At 80 rows these measures scatter under a round-off
-perturbation: a run that differed only in the 13th digit of the volume consistency's disorder
-coefficient read a P1 peak of 3.00 (+15.9 %) and RMS values up to 10 % apart
-(``docs/theory/stabilisation.md`` §10). Without the volume consistency (2026-12-02): 2.84 and
+and 0.38 %; no particle behind a wall. At 80 rows these measures scatter under round-off
+(``verification/results/fluid_core/impact_scatter.md``: ``c0_factor`` or ``g`` perturbed by
+10⁻¹²): the P1 peak of four runs reads 2.51 to 3.02 (−3.3 to +16.7 %), mean 2.74 (+5.8 %) with
+a standard deviation of 0.25, and the RMS deviations 4–10 % apart (means 0.213 / 0.209 / 0.153 /
+0.143). A single run's peak is one draw of that spread (``docs/theory/stabilisation.md`` §10). Without the volume consistency (2026-12-02): 2.84 and
 3.00, RMS 0.283 / 0.459 / 0.191 / 0.158 and 0.180 / 0.224 / 0.138 / 0.134. The peak rises with
 resolution and has not converged. It moved with two fixes of the linear consistency
 (``docs/theory/stabilisation.md`` §7; before them +3.3 and +11.0 %, raw 5.79 and 5.34, RMS of P1
