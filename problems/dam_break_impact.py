@@ -37,9 +37,12 @@ and 0.38 %; no particle behind a wall. At 80 rows these measures scatter under r
 (``verification/results/fluid_core/impact_scatter.md``: ``c0_factor`` or ``g`` perturbed by
 10⁻¹²): the P1 peak of four runs reads 2.51 to 3.02 (−3.3 to +16.7 %), mean 2.74 (+5.8 %) with
 a standard deviation of 0.25, and the RMS deviations 4–10 % apart (means 0.213 / 0.209 / 0.153 /
-0.143). A single run's peak is one draw of that spread (``docs/theory/stabilisation.md`` §10). Without the volume consistency (2026-12-02): 2.84 and
-3.00, RMS 0.283 / 0.459 / 0.191 / 0.158 and 0.180 / 0.224 / 0.138 / 0.134. The peak rises with
-resolution and has not converged. It moved with two fixes of the linear consistency
+0.143); at 40 rows the same family is tight (P1 2.84–2.86, mean 2.85, +10.1 %; RMS means 0.322 /
+0.474 / 0.212 / 0.176). Family against family the RMS deviation falls with resolution at every
+sensor and the P1 peak's mean falls from +10.1 to +5.8 %; a single run's peak at 80 rows is one
+draw of that spread (``docs/theory/stabilisation.md`` §10). Without the volume consistency (2026-12-02): 2.84 and
+3.00, RMS 0.283 / 0.459 / 0.191 / 0.158 and 0.180 / 0.224 / 0.138 / 0.134. In single runs the peak rose
+with resolution; in the families above its mean falls, and it has not converged. It moved with two fixes of the linear consistency
 (``docs/theory/stabilisation.md`` §7; before them +3.3 and +11.0 %, raw 5.79 and 5.34, RMS of P1
 0.291 and 0.166, pressure noise at P1 0.256 and 0.190, now 0.298 and 0.220). At ``H/Δx = 20``:
 −15.2 % before, +6.0 % with the departure from the pressure fit taken over the support only,
