@@ -105,7 +105,7 @@ class Parameters:
     negative_pressure: str = "cavitate"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     volume_consistency: float = RECOMMENDED.volume_consistency  #: the density relaxed towards the particles' packing at rate ε where the fluid has a free surface (0: off) (–)
-    loose_band: float = 0.0     #: the volume consistency's loose side: past this volume error the surface rows' density relaxes (0: off) (–)
+    loose_band: float = 0.0     #: the volume consistency's loose side: past this volume error the density outside the deep bulk relaxes (0: off) (–)
     c0_factor: float = 10.0       #: sound speed / 2 sqrt(gH) (–)
     g: float = 9.81               #: gravitational acceleration (m/s²)
     probe_every: float = 1.0e-3   #: time between time-series rows (s)

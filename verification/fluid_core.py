@@ -24,6 +24,7 @@ gravity current). Each section writes ``<section>.csv`` and ``<section>.md`` int
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import math
 import re
@@ -271,7 +272,6 @@ def section_scatter(args, out: Path, runs: Path) -> None:
     rows = [one("dam_break_impact", label, ov, runs) for label, ov in scatter_cases(args.quick, args.finest)]
     table = out / "impact.csv"
     if table.is_file():      # the impact section's runs are the unperturbed members of each family
-        import csv
         for r in csv.DictReader(table.read_text().splitlines()):
             rows.append({**r, "case": f"{r['case']} (impact table)"})
     stats = []
@@ -289,7 +289,7 @@ def section_scatter(args, out: Path, runs: Path) -> None:
 down, g up) beside the impact table's own run: four runs per resolution that differ at round-off
 only. The measures are those of impact.md. The spread of the family is how far a single run's
 P1 peak and RMS deviations can be trusted; the mean is the estimate to compare with the goal (P1
-peak within 15 % at the finest resolution). The impact table's runs are those of impact.md (commit e4bab08).""", ["case", "status", "steps", *SCATTER_MEASURES, "P1_peak_T",
+peak within 15 % at the finest resolution). The rows marked "(impact table)" are impact.md's own runs, with its provenance.""", ["case", "status", "steps", *SCATTER_MEASURES, "P1_peak_T",
                                                  "ringing_period_T", "wall_time_s", "run_commit"])
 
 

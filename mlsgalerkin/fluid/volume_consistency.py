@@ -76,9 +76,9 @@ which some fluid particle's sum is below ``surface · c_ref`` (a free surface, a
 *The loose side* (``loose_band``, opt-in). Below the surface rows the sum is cut by the surface,
 so the deep mean cannot see a packing that has spread there. In ``beam_clamped`` the water thrown
 over the beam falls back and settles as a layer whose particles stand 1.2–2 spacings apart at
-the hydrostatic density: :math:`\sum M/\rho` holds (0.0192 → 0.0192 m² from 0.5 to 4 s at
-Δx = 8 mm) while the geometric volume grows by 8.5 %. The pressure then holds the layer up at any
-packing. The loose side measures the fluid's volume error
+the density their continuity gives them: :math:`\sum M/\rho` holds (0.01922 → 0.01915 m² from
+0.5 to 4 s at Δx = 8 mm) while the geometric volume grows by 8.5 %. Their pressure holds the layer
+up at any packing. The loose side measures the fluid's volume error
 :math:`e = V_\mathrm{geo}/\sum M/\rho - 1` (:func:`~mlsgalerkin.fluid.distribution.volume_error`,
 the run checks' measure; a few milliseconds, so every ``loose_every`` evaluations) and, past the
 band ``e_0``, relaxes the particles that are neither deep nor splashes (sum at least
