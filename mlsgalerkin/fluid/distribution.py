@@ -403,11 +403,14 @@ def pair_statistics_reference(indptr, indices, x, n_fluid, spacing, clump_distan
 
 
 def volume_error(x: NDArray[np.float64], M: NDArray[np.float64], rho: NDArray[np.float64],
-                 spacing: float) -> tuple[float, float]:
+                 spacing: float, rows: NDArray[np.bool_] | None = None) -> tuple[float, float]:
     """The geometric volume ``V_geo`` (m^d) of the particles at ``x (n, d)`` (m; :func:`geometric_volume`)
     and its **volume error** ``V_geo / Σ M/ρ − 1`` (–) against the volume their masses ``M (n,)``
     (kg/m^(3−d)) and densities ``ρ (n,)`` say; ``(0, 0)`` without particles. Positive: the particles
-    stand farther apart than their volumes say (voids, a loose packing); negative: tighter."""
+    stand farther apart than their volumes say (voids, a loose packing); negative: tighter.
+    ``rows`` (bool ``(n,)``): only these particles."""
+    if rows is not None:
+        x, M, rho = x[rows], M[rows], rho[rows]
     if x.shape[0] == 0:
         return 0.0, 0.0
     vgeo = geometric_volume(x, spacing)

@@ -54,6 +54,7 @@ __all__ = [
     "ParticlesLeftDomainWarning",
     "mark_and_hold",
     "mark_and_hold_reference",
+    "still_in_run",
 ]
 
 #: The state's ``extra`` array that marks the fluid particles taken out of the run (bool ``(n,)``).
@@ -65,6 +66,13 @@ MARGIN_RADII = 2.0
 #: How far past the domain (in search radii) the neighbour search puts the particles taken out,
 #: and how far apart: no two of them, and none of them and a particle inside, are neighbours.
 _PARK_RADII = 4.0
+
+
+def still_in_run(s: FluidState) -> NDArray[np.bool_]:
+    """The mask ``(n_fluid,)`` of the fluid particles not taken out of the run (all of them when no
+    :class:`DomainExit` marks any)."""
+    out = s.extra.get(OUTSIDE)
+    return ~out[: s.n_fluid] if out is not None else np.ones(s.n_fluid, dtype=bool)
 
 
 @numba.njit(cache=True)

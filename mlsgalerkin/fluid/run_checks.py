@@ -52,7 +52,7 @@ from typing import Any
 import numpy as np
 
 from mlsgalerkin.fluid.distribution import CLUMP_DISTANCE, pair_statistics, volume_error
-from mlsgalerkin.fluid.domain_exit import OUTSIDE
+from mlsgalerkin.fluid.domain_exit import still_in_run
 from mlsgalerkin.fluid.eos import MachNumberWarning
 from mlsgalerkin.fluid.state import FluidState
 
@@ -138,10 +138,9 @@ class FluidRunChecks:
     def _distribution(self, s: FluidState) -> dict[str, float]:
         f = s.fluid
         out: dict[str, float] = {}
-        out_rows = s.extra.get(OUTSIDE)
-        inside = ~out_rows[f] if out_rows is not None else np.ones(s.n_fluid, dtype=bool)
+        inside = still_in_run(s)
         if inside.any():    # the particles taken out of the run (domain_exit) are left out
-            vgeo, err = volume_error(s.x[f][inside], s.M[f][inside], s.rho[f][inside], s.spacing)
+            vgeo, err = volume_error(s.x[f], s.M[f], s.rho[f], s.spacing, inside)
             out["geometric_volume"] = vgeo
             out["volume_error"] = err
             self._record_volume(s, err)

@@ -120,7 +120,7 @@ from numpy.typing import NDArray
 from mlsgalerkin.approximation.table import ShapeTable
 from mlsgalerkin.fluid.closed_volume import ClosedVolume
 from mlsgalerkin.fluid.distribution import volume_error
-from mlsgalerkin.fluid.domain_exit import OUTSIDE
+from mlsgalerkin.fluid.domain_exit import still_in_run
 from mlsgalerkin.fluid.effect import Effect, EffectContext, check_positive
 from mlsgalerkin.fluid.state import FluidState
 from mlsgalerkin.kernels import get_kernel
@@ -340,9 +340,7 @@ class VolumeConsistency(Effect):
         of the particles of :func:`loose_particles` relaxed down."""
         nf = s.n_fluid
         if (self.surface_evaluations - 1) % self.loose_every == 0:
-            outside = s.extra.get(OUTSIDE)
-            inside = ~outside[:nf] if outside is not None else np.ones(nf, dtype=bool)
-            _, self.loose_error = volume_error(s.x[:nf][inside], s.M[:nf][inside], s.rho[:nf][inside], s.spacing)
+            _, self.loose_error = volume_error(s.x[:nf], s.M[:nf], s.rho[:nf], s.spacing, still_in_run(s))
             self.loose_error_largest = max(self.loose_error_largest, self.loose_error)
         excess = self.loose_error - self.loose_band
         if excess <= 0.0:
