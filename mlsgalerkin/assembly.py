@@ -23,8 +23,10 @@ angular momentum because ``Σ_i x_i ⊗ ∇N_i = I`` with a symmetric stress (li
 Petrov–Galerkin: every function takes the *test* table; pass a different table for the test
 functions than the one used for the trial field (``velocity_gradient``) to leave Bubnov–Galerkin.
 
-The scatters (point → node sums) run in numba with one private accumulator per thread, then
-a reduction, so the parallel loop has no write races. ``*_reference`` functions are the numpy
+The point → node sums run in numba as gathers: each node sums over its column of the table
+(:meth:`ShapeTable.node_columns`, the pairs grouped by node) in ascending point order. The
+parallel loop has no write races, and the result is the same, bit for bit, on any number of
+threads (and equal to the serial scatter over the table's rows). ``*_reference`` functions are the numpy
 versions (``scipy.sparse`` products) used by the agreement tests.
 """
 
@@ -88,64 +90,51 @@ def _per_node(name: str, a: ArrayLike, table: ShapeTable, trailing: tuple[int, .
 # --------------------------------------------------------------------------------------
 
 
-@numba.njit(cache=True)
-def _thread_blocks(n_rows, n_blocks):
-    edges = np.empty(n_blocks + 1, dtype=np.int64)
-    for b in range(n_blocks + 1):
-        edges[b] = (n_rows * b) // n_blocks
-    return edges
-
-
 @numba.njit(parallel=True, cache=True)
-def _sum_slabs(slab):
-    """Reduce per-thread accumulators ``(n_blocks, n_nodes, n_c)`` to ``(n_nodes, n_c)``."""
-    n_blocks, n_nodes, n_c = slab.shape
+def _scatter_weighted_values(col_ptr, col_pairs, col_rows, values, weight, n_nodes):
+    """``out[i, c] = Σ_k N_i(x_k) weight[k, c]`` (a transposed sparse product), summed per node
+    over its column (:meth:`ShapeTable.node_columns`) in ascending ``k``."""
+    n_c = weight.shape[1]
     out = np.zeros((n_nodes, n_c))
     for i in prange(n_nodes):
-        for b in range(n_blocks):
+        for t in range(col_ptr[i], col_ptr[i + 1]):
+            p = col_pairs[t]
+            k = col_rows[t]
+            v = values[p]
             for c in range(n_c):
-                out[i, c] += slab[b, i, c]
+                out[i, c] += v * weight[k, c]
     return out
 
 
 @numba.njit(parallel=True, cache=True)
-def _scatter_weighted_values(indptr, indices, values, weight, n_nodes, n_blocks):
-    """``out[i, c] = Σ_k N_i(x_k) weight[k, c]`` (a transposed sparse product)."""
-    n_rows = indptr.shape[0] - 1
-    n_c = weight.shape[1]
-    edges = _thread_blocks(n_rows, n_blocks)
-    slab = np.zeros((n_blocks, n_nodes, n_c))
-    for b in prange(n_blocks):
-        for k in range(edges[b], edges[b + 1]):
-            for p in range(indptr[k], indptr[k + 1]):
-                i = indices[p]
-                v = values[p]
-                for c in range(n_c):
-                    slab[b, i, c] += v * weight[k, c]
-    return _sum_slabs(slab)
-
-
-@numba.njit(parallel=True, cache=True)
-def _force_mass(indptr, indices, values, grads, sig_v, M, n_nodes, n_blocks, want_mass):
-    """``out[i, :d] = −Σ_k (σ V)_k ∇N_i(x_k)`` and, if ``want_mass``, ``out[i, d] = Σ_k N_i(x_k) M_k``."""
-    n_rows = indptr.shape[0] - 1
+def _force_mass(col_ptr, col_pairs, col_rows, values, grads, sig_v, M, n_nodes, want_mass):
+    """``out[i, :d] = −Σ_k (σ V)_k ∇N_i(x_k)`` and, if ``want_mass``, ``out[i, d] = Σ_k N_i(x_k) M_k``,
+    summed per node over its column in ascending ``k`` (``d`` = 1, 2 or 3)."""
     dim = grads.shape[1]
-    nc = dim + 1
-    edges = _thread_blocks(n_rows, n_blocks)
-    slab = np.zeros((n_blocks, n_nodes, nc))
-    for blk in prange(n_blocks):
-        for k in range(edges[blk], edges[blk + 1]):
-            mk = M[k]
-            for p in range(indptr[k], indptr[k + 1]):
-                i = indices[p]
-                for a in range(dim):
-                    acc = 0.0
-                    for b in range(dim):
-                        acc += sig_v[k, a, b] * grads[p, b]
-                    slab[blk, i, a] -= acc
-                if want_mass:
-                    slab[blk, i, dim] += values[p] * mk
-    return _sum_slabs(slab)
+    out = np.zeros((n_nodes, dim + 1))
+    for i in prange(n_nodes):
+        f0 = f1 = f2 = m = 0.0
+        for t in range(col_ptr[i], col_ptr[i + 1]):
+            p = col_pairs[t]
+            k = col_rows[t]
+            if dim == 1:
+                f0 -= sig_v[k, 0, 0] * grads[p, 0]
+            elif dim == 2:
+                f0 -= sig_v[k, 0, 0] * grads[p, 0] + sig_v[k, 0, 1] * grads[p, 1]
+                f1 -= sig_v[k, 1, 0] * grads[p, 0] + sig_v[k, 1, 1] * grads[p, 1]
+            else:
+                f0 -= sig_v[k, 0, 0] * grads[p, 0] + sig_v[k, 0, 1] * grads[p, 1] + sig_v[k, 0, 2] * grads[p, 2]
+                f1 -= sig_v[k, 1, 0] * grads[p, 0] + sig_v[k, 1, 1] * grads[p, 1] + sig_v[k, 1, 2] * grads[p, 2]
+                f2 -= sig_v[k, 2, 0] * grads[p, 0] + sig_v[k, 2, 1] * grads[p, 1] + sig_v[k, 2, 2] * grads[p, 2]
+            if want_mass:
+                m += values[p] * M[k]
+        out[i, 0] = f0
+        if dim >= 2:
+            out[i, 1] = f1
+        if dim == 3:
+            out[i, 2] = f2
+        out[i, dim] = m
+    return out
 
 
 @numba.njit(parallel=True, cache=True)
@@ -206,46 +195,31 @@ def _grad_div(indptr, indices, grads, v, L, div):
 
 
 @numba.njit(parallel=True, cache=True)
-def _integration_terms(indptr, indices, values, grads, V, sig_v, c, n_nodes, n_blocks):
+def _integration_terms(col_ptr, col_pairs, col_rows, values, grads, V, sig_v, c, n_nodes):
     """Per node ``i``: ``e_i = Σ_k V_k ∇N_i(x_k)`` (columns ``:d``), ``w_i = Σ_k V_k N_i(x_k)``
     (column ``d``), ``S_i = Σ_k N_i(x_k) (σV)_k`` (columns ``d+1:``, row-major ``d × d``), and
-    ``min_k c_k`` over the points whose row holds ``i`` (column ``nc``), in one parallel scatter
-    and one parallel reduction."""
-    n_rows = indptr.shape[0] - 1
+    ``min_k c_k`` over the points whose row holds ``i`` (column ``nc``), summed per node over its
+    column in ascending ``k``."""
     dim = grads.shape[1]
     nc = dim + 1 + dim * dim
-    edges = _thread_blocks(n_rows, n_blocks)
-    slab = np.zeros((n_blocks, n_nodes, nc + 1))
-    for blk in prange(n_blocks):
-        for i in range(n_nodes):
-            slab[blk, i, nc] = np.inf
-        for k in range(edges[blk], edges[blk + 1]):
-            vk = V[k]
-            ck = c[k]
-            for p in range(indptr[k], indptr[k + 1]):
-                i = indices[p]
-                nv = values[p]
-                for a in range(dim):
-                    slab[blk, i, a] += vk * grads[p, a]
-                slab[blk, i, dim] += vk * nv
-                for a in range(dim):
-                    for b in range(dim):
-                        slab[blk, i, dim + 1 + a * dim + b] += nv * sig_v[k, a, b]
-                if ck < slab[blk, i, nc]:
-                    slab[blk, i, nc] = ck
     out = np.zeros((n_nodes, nc + 1))
     for i in prange(n_nodes):
-        out[i, nc] = np.inf
-        for blk in range(n_blocks):
-            for col in range(nc):
-                out[i, col] += slab[blk, i, col]
-            if slab[blk, i, nc] < out[i, nc]:
-                out[i, nc] = slab[blk, i, nc]
+        lowest = np.inf
+        for t in range(col_ptr[i], col_ptr[i + 1]):
+            p = col_pairs[t]
+            k = col_rows[t]
+            vk = V[k]
+            nv = values[p]
+            for a in range(dim):
+                out[i, a] += vk * grads[p, a]
+            out[i, dim] += vk * nv
+            for a in range(dim):
+                for b in range(dim):
+                    out[i, dim + 1 + a * dim + b] += nv * sig_v[k, a, b]
+            if c[k] < lowest:
+                lowest = c[k]
+        out[i, nc] = lowest
     return out
-
-
-def _n_blocks() -> int:
-    return max(1, numba.get_num_threads())
 
 
 # --------------------------------------------------------------------------------------
@@ -260,7 +234,8 @@ def lumped_mass(table: ShapeTable, masses: ArrayLike) -> FloatArray:
     functions are a partition of unity, ``Σ_i m_i = Σ_k M_k``.
     """
     M = _per_point("masses", masses, table)
-    return _scatter_weighted_values(table.indptr, table.indices, table.values, M[:, None], table.n_nodes, _n_blocks())[:, 0]
+    cols = table.node_columns()
+    return _scatter_weighted_values(cols.indptr, cols.pairs, cols.rows, table.values, M[:, None], table.n_nodes)[:, 0]
 
 
 def consistent_mass(table: ShapeTable, masses: ArrayLike):
@@ -294,7 +269,8 @@ def body_force(table: ShapeTable, body: ArrayLike, volumes: ArrayLike) -> FloatA
     """
     b = _per_point("body", body, table, (table.dim,))
     V = _per_point("volumes", volumes, table)
-    return _scatter_weighted_values(table.indptr, table.indices, table.values, b * V[:, None], table.n_nodes, _n_blocks())
+    cols = table.node_columns()
+    return _scatter_weighted_values(cols.indptr, cols.pairs, cols.rows, table.values, b * V[:, None], table.n_nodes)
 
 
 def traction_force(boundary_table: ShapeTable, traction: ArrayLike, areas: ArrayLike) -> FloatArray:
@@ -357,8 +333,9 @@ def internal_force_and_mass(table: ShapeTable, stress_volume: FloatArray, masses
     """Internal force ``f (n_nodes, d)`` from ``stress_volume = σ V (n_points, d, d)`` and the
     lumped mass ``m (n_nodes,)`` from ``masses (n_points,)`` in one scatter, without input
     checks (for solvers); ``m`` is zero when ``want_mass`` is False."""
-    out = _force_mass(table.indptr, table.indices, table.values, table.gradients, stress_volume, masses,
-                      table.n_nodes, _n_blocks(), want_mass)
+    cols = table.node_columns()
+    out = _force_mass(cols.indptr, cols.pairs, cols.rows, table.values, table.gradients, stress_volume, masses,
+                      table.n_nodes, want_mass)
     d = table.dim
     return np.ascontiguousarray(out[:, :d]), out[:, d].copy()
 
@@ -387,8 +364,9 @@ def integration_terms(table: ShapeTable, volumes: FloatArray, stress_volume: Flo
     ``volumes (n_points,)``, ``stress_volume = σ V (n_points, d, d)``, ``point_scalar (n_points,)``,
     all C-contiguous float64."""
     d = table.dim
-    out = _integration_terms(table.indptr, table.indices, table.values, table.gradients, volumes, stress_volume,
-                             point_scalar, table.n_nodes, _n_blocks())
+    cols = table.node_columns()
+    out = _integration_terms(cols.indptr, cols.pairs, cols.rows, table.values, table.gradients, volumes,
+                             stress_volume, point_scalar, table.n_nodes)
     return IntegrationTerms(np.ascontiguousarray(out[:, :d]), out[:, d].copy(),
                             np.ascontiguousarray(out[:, d + 1:-1]).reshape(-1, d, d), out[:, -1].copy())
 

@@ -5,10 +5,81 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from functools import cached_property
 
+import numba
 import numpy as np
+from numba import prange
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["ShapeTable"]
+__all__ = ["NodeColumns", "ShapeTable"]
+
+
+@dataclass(frozen=True, eq=False)
+class NodeColumns:
+    """The pairs of a :class:`ShapeTable` grouped by node (the transposed CSR layout).
+
+    Node ``i``'s pairs are ``pairs[indptr[i]:indptr[i + 1]]`` (indices into the table's pair
+    arrays), in ascending evaluation point; ``rows`` holds each one's point. A sum over the
+    points a node couples to, taken in this order, is the same number whatever the thread count,
+    and equals the serial scatter ``out[indices[p]] += ...`` over the table's rows.
+
+    Attributes
+    ----------
+    indptr : (n_nodes + 1,) int64 array
+    pairs : (n_pairs,) int32 array (int64 past 2³¹ − 1 pairs)
+    rows : (n_pairs,) int32 array (likewise)
+    """
+
+    indptr: NDArray[np.int64]
+    pairs: NDArray[np.int64]
+    rows: NDArray[np.int64]
+    source: tuple = field(default=(), repr=False)
+
+    @classmethod
+    def of(cls, indptr: NDArray[np.int64], indices: NDArray[np.int32], n_nodes: int) -> NodeColumns:
+        """The columns of the CSR structure ``(indptr, indices)`` over ``n_nodes`` nodes."""
+        wide = indices.shape[0] >= np.iinfo(np.int32).max
+        col_ptr, pairs, rows = _group_pairs_by_node(indptr, indices, n_nodes, max(1, numba.get_num_threads()),
+                                                    np.int64 if wide else np.int32)
+        return cls(col_ptr, pairs, rows, (indptr, indices))
+
+    def built_from(self, indptr: NDArray[np.int64], indices: NDArray[np.int32]) -> bool:
+        """Whether these columns were built from these very arrays (not equal copies)."""
+        return len(self.source) == 2 and self.source[0] is indptr and self.source[1] is indices
+
+
+@numba.njit(parallel=True, cache=True)
+def _group_pairs_by_node(indptr, indices, n_nodes, n_blocks, index_type):
+    """Stable counting sort of the pairs by node: ``(col_ptr, pairs, rows)`` of :class:`NodeColumns`.
+
+    The rows are cut into ``n_blocks`` ranges counted and placed in parallel; every pair's place
+    (by node, then by row) is fixed by integer counts, so the result is the same for any
+    ``n_blocks``."""
+    n_rows = indptr.shape[0] - 1
+    n_pairs = indices.shape[0]
+    counts = np.zeros((n_blocks, n_nodes), dtype=np.int64)
+    for b in prange(n_blocks):
+        for p in range(indptr[(n_rows * b) // n_blocks], indptr[(n_rows * (b + 1)) // n_blocks]):
+            counts[b, indices[p]] += 1
+    col_ptr = np.empty(n_nodes + 1, dtype=np.int64)
+    running = 0
+    for i in range(n_nodes):
+        col_ptr[i] = running
+        for b in range(n_blocks):
+            c = counts[b, i]
+            counts[b, i] = running
+            running += c
+    col_ptr[n_nodes] = running
+    pairs = np.empty(n_pairs, dtype=index_type)
+    rows = np.empty(n_pairs, dtype=index_type)
+    for b in prange(n_blocks):
+        for k in range((n_rows * b) // n_blocks, (n_rows * (b + 1)) // n_blocks):
+            for p in range(indptr[k], indptr[k + 1]):
+                i = indices[p]
+                t = counts[b, i]
+                pairs[t] = p
+                rows[t] = k
+                counts[b, i] = t + 1
+    return col_ptr, pairs, rows
 
 
 @dataclass(frozen=True, eq=False)
@@ -124,6 +195,17 @@ class ShapeTable:
             csr_array((np.ascontiguousarray(self.gradients[:, k]), self.indices, self.indptr), shape=shape)
             for k in range(self.dim)
         )
+
+    def node_columns(self) -> NodeColumns:
+        """The pairs grouped by node (:class:`NodeColumns`), for sums over the points each node
+        couples to that do not depend on the thread count. Built in O(n_pairs) on first use and
+        kept in ``meta["node_columns"]``; a table built with ``out=`` an earlier one on the same
+        neighbour arrays (a step without a neighbour rebuild) inherits them."""
+        cols = self.meta.get("node_columns")
+        if cols is None or not cols.built_from(self.indptr, self.indices):
+            cols = NodeColumns.of(self.indptr, self.indices, self.n_nodes)
+            self.meta["node_columns"] = cols
+        return cols
 
     def value_matrix(self):
         """``N`` as a ``scipy.sparse.csr_array`` of shape ``(n_points, n_nodes)``."""

@@ -124,42 +124,36 @@ FloatArray = NDArray[np.float64]
 
 
 @numba.njit(parallel=True, cache=True)
-def _corrected_scatter(indptr, indices, values, grads, x, V, fit, ok, face_of, delta, load, period, n_fluid,
-                       n_blocks):
-    """``Δf_j`` of the corrected fluid nodes ``j`` (``ok[j]``) in one scatter over the rows ``k`` of
-    the table, by thread blocks:
+def _corrected_scatter(col_ptr, col_pairs, col_rows, values, grads, x, V, fit, ok, face_of, delta, load, period,
+                       n_fluid):
+    """``Δf_j`` of the corrected fluid nodes ``j`` (``ok[j]``), each summed over its column of the
+    table (:meth:`~mlsgalerkin.approximation.table.ShapeTable.node_columns`) in ascending row ``k``:
 
     ``Δf_j −= V_k [∇N_j(x_k) (a_j + g_j·(x_k − x_j)) + N_j(x_k) g_j]`` (the DNI of the fit taken out
     and its exact volume integral put in; ``fit[j] = (a_j, g_j)``) and, on the row of a surface
     particle with face ``f = face_of[k] ≥ 0``, ``Δf_j += (N_j(x_k) + ∇N_j(x_k)·δ_f) load_f`` (the
     boundary term). ``x_k − x_j`` is the minimum image along the periodic axes."""
-    n_rows = indptr.shape[0] - 1
     dim = grads.shape[1]
-    slab = np.zeros((n_blocks, n_fluid, dim))
-    for blk in prange(n_blocks):
-        for k in range((n_rows * blk) // n_blocks, (n_rows * (blk + 1)) // n_blocks):
-            vk = V[k]
-            f = face_of[k] if k < n_fluid else -1
-            for q in range(indptr[k], indptr[k + 1]):
-                j = indices[q]
-                if j >= n_fluid or not ok[j]:
-                    continue
-                fit_value = fit[j, 0]
-                for b in range(dim):
-                    fit_value += fit[j, 1 + b] * image_component(x[k, b] - x[j, b], period[b])
-                nv = values[q]
-                for a in range(dim):
-                    slab[blk, j, a] -= vk * (grads[q, a] * fit_value + nv * fit[j, 1 + a])
-                if f >= 0:
-                    for b in range(dim):
-                        nv += grads[q, b] * delta[f, b]
-                    for a in range(dim):
-                        slab[blk, j, a] += nv * load[f, a]
     out = np.zeros((n_fluid, dim))
     for j in prange(n_fluid):
-        for blk in range(n_blocks):
+        if not ok[j]:
+            continue
+        for t in range(col_ptr[j], col_ptr[j + 1]):
+            q = col_pairs[t]
+            k = col_rows[t]
+            vk = V[k]
+            f = face_of[k] if k < n_fluid else -1
+            fit_value = fit[j, 0]
+            for b in range(dim):
+                fit_value += fit[j, 1 + b] * image_component(x[k, b] - x[j, b], period[b])
+            nv = values[q]
             for a in range(dim):
-                out[j, a] += slab[blk, j, a]
+                out[j, a] -= vk * (grads[q, a] * fit_value + nv * fit[j, 1 + a])
+            if f >= 0:
+                for b in range(dim):
+                    nv += grads[q, b] * delta[f, b]
+                for a in range(dim):
+                    out[j, a] += nv * load[f, a]
     return out
 
 
@@ -304,7 +298,7 @@ def linear_consistency_force(s: FluidState, *, surface: float = 0.85, c_min: flo
     """The correction ``Δf (n_fluid, d)`` (N per unit depth in 2D) of the module docstring at the
     current state (table with its Shepard sums, volumes, pressures), the mask ``(n_fluid,)`` of
     corrected fluid nodes and the number of surface faces. Two compiled passes: a gather over the
-    table's fluid rows (:func:`_fit`) and a scatter over all its rows (:func:`_corrected_scatter`);
+    table's fluid rows (:func:`_fit`) and a gather over the table's node columns (:func:`_corrected_scatter`);
     :func:`linear_consistency_force_reference` is the numpy version."""
     t = s.table
     nf, d = s.n_fluid, s.x.shape[1]
@@ -318,9 +312,10 @@ def linear_consistency_force(s: FluidState, *, surface: float = 0.85, c_min: flo
     delta = np.ascontiguousarray(0.5 * s.spacing * n_s)
     ph = fit[surf, 0] + np.einsum("sd,sd->s", fit[surf, 1:], delta)
     load = np.ascontiguousarray((ph * s.spacing ** (d - 1))[:, None] * n_s)
-    df = _corrected_scatter(t.indptr, t.indices, t.values, t.gradients, s.x,
+    cols = t.node_columns()
+    df = _corrected_scatter(cols.indptr, cols.pairs, cols.rows, t.values, t.gradients, s.x,
                             np.ascontiguousarray(s.volume, dtype=float), fit, ok, face_of, delta, load,
-                            s.period, nf, max(1, numba.get_num_threads()))
+                            s.period, nf)
     return df, ok, int(surf.size)
 
 
