@@ -91,7 +91,7 @@ def _per_node(name: str, a: ArrayLike, table: ShapeTable, trailing: tuple[int, .
 
 
 @numba.njit(parallel=True, cache=True)
-def _scatter_weighted_values(col_ptr, col_pairs, col_rows, values, weight, n_nodes):
+def _gather_weighted_values(col_ptr, col_pairs, col_rows, values, weight, n_nodes):
     """``out[i, c] = Σ_k N_i(x_k) weight[k, c]`` (a transposed sparse product), summed per node
     over its column (:meth:`ShapeTable.node_columns`) in ascending ``k``."""
     n_c = weight.shape[1]
@@ -235,7 +235,7 @@ def lumped_mass(table: ShapeTable, masses: ArrayLike) -> FloatArray:
     """
     M = _per_point("masses", masses, table)
     cols = table.node_columns()
-    return _scatter_weighted_values(cols.indptr, cols.pairs, cols.rows, table.values, M[:, None], table.n_nodes)[:, 0]
+    return _gather_weighted_values(cols.indptr, cols.pairs, cols.rows, table.values, M[:, None], table.n_nodes)[:, 0]
 
 
 def consistent_mass(table: ShapeTable, masses: ArrayLike):
@@ -270,7 +270,7 @@ def body_force(table: ShapeTable, body: ArrayLike, volumes: ArrayLike) -> FloatA
     b = _per_point("body", body, table, (table.dim,))
     V = _per_point("volumes", volumes, table)
     cols = table.node_columns()
-    return _scatter_weighted_values(cols.indptr, cols.pairs, cols.rows, table.values, b * V[:, None], table.n_nodes)
+    return _gather_weighted_values(cols.indptr, cols.pairs, cols.rows, table.values, b * V[:, None], table.n_nodes)
 
 
 def traction_force(boundary_table: ShapeTable, traction: ArrayLike, areas: ArrayLike) -> FloatArray:

@@ -30,9 +30,9 @@ class NodeColumns:
     """
 
     indptr: NDArray[np.int64]
-    pairs: NDArray[np.int64]
-    rows: NDArray[np.int64]
-    source: tuple = field(default=(), repr=False)
+    pairs: NDArray[np.integer]
+    rows: NDArray[np.integer]
+    source: tuple = field(default=(), repr=False)   #: the (indptr, indices) it was built from
 
     @classmethod
     def of(cls, indptr: NDArray[np.int64], indices: NDArray[np.int32], n_nodes: int) -> NodeColumns:

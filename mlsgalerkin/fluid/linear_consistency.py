@@ -124,7 +124,7 @@ FloatArray = NDArray[np.float64]
 
 
 @numba.njit(parallel=True, cache=True)
-def _corrected_scatter(col_ptr, col_pairs, col_rows, values, grads, x, V, fit, ok, face_of, delta, load, period,
+def _corrected_gather(col_ptr, col_pairs, col_rows, values, grads, x, V, fit, ok, face_of, delta, load, period,
                        n_fluid):
     """``Δf_j`` of the corrected fluid nodes ``j`` (``ok[j]``), each summed over its column of the
     table (:meth:`~mlsgalerkin.approximation.table.ShapeTable.node_columns`) in ascending row ``k``:
@@ -298,7 +298,7 @@ def linear_consistency_force(s: FluidState, *, surface: float = 0.85, c_min: flo
     """The correction ``Δf (n_fluid, d)`` (N per unit depth in 2D) of the module docstring at the
     current state (table with its Shepard sums, volumes, pressures), the mask ``(n_fluid,)`` of
     corrected fluid nodes and the number of surface faces. Two compiled passes: a gather over the
-    table's fluid rows (:func:`_fit`) and a gather over the table's node columns (:func:`_corrected_scatter`);
+    table's fluid rows (:func:`_fit`) and a gather over the table's node columns (:func:`_corrected_gather`);
     :func:`linear_consistency_force_reference` is the numpy version."""
     t = s.table
     nf, d = s.n_fluid, s.x.shape[1]
@@ -313,7 +313,7 @@ def linear_consistency_force(s: FluidState, *, surface: float = 0.85, c_min: flo
     ph = fit[surf, 0] + np.einsum("sd,sd->s", fit[surf, 1:], delta)
     load = np.ascontiguousarray((ph * s.spacing ** (d - 1))[:, None] * n_s)
     cols = t.node_columns()
-    df = _corrected_scatter(cols.indptr, cols.pairs, cols.rows, t.values, t.gradients, s.x,
+    df = _corrected_gather(cols.indptr, cols.pairs, cols.rows, t.values, t.gradients, s.x,
                             np.ascontiguousarray(s.volume, dtype=float), fit, ok, face_of, delta, load,
                             s.period, nf)
     return df, ok, int(surf.size)
