@@ -110,7 +110,7 @@ class Parameters:
     void_memory: float = 0.0      #: void strain a cavitated particle remembers, 0 for none (cavitate only) (–)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     volume_consistency: float = RECOMMENDED.volume_consistency  #: the density relaxed towards the particles' packing at rate ε where the fluid has a free surface (0: off) (–)
-    loose_band: float = 0.0     #: the volume consistency's loose side: past this volume error the density outside the deep bulk relaxes (0: off) (–)
+    loose_band: float = RECOMMENDED.loose_band  #: the volume consistency's loose side: past this volume error the density outside the deep bulk relaxes (0: off; off with the volume consistency) (–)
     c0_factor: float = 10.0       #: sound speed / 2 sqrt(gH) (–)
     g: float = 9.81               #: gravitational acceleration (m/s²)
     probe_every: float = 1.0e-3   #: time between time-series rows (s)
@@ -153,7 +153,8 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), alpha=p.alpha, delta=p.delta, shifting=p.shifting,
                    negative_pressure=p.negative_pressure, void_memory=p.void_memory, penalty_thickness=0.25 * p.dx,
                    linear_consistency=p.linear_consistency,
-                   volume_consistency=p.volume_consistency, loose_band=p.loose_band, spacing=p.dx)
+                   volume_consistency=p.volume_consistency,
+                   loose_band=p.loose_band if p.volume_consistency else 0.0, spacing=p.dx)
 
     def tip_x(state) -> float:
         m = state.body("beam")
@@ -242,9 +243,6 @@ def check(p: Parameters) -> list[str]:
                            "rho_beam", "elements", "tank_length", "dx", "t_end", "rho", "c0_factor", "g",
                            "probe_every", "frame_every")
     out += require_nonnegative(p, "alpha", "delta", "wall_acceleration", "void_memory", "loose_band")
-    out += require(p.loose_band == 0 or p.volume_consistency > 0,
-                   "loose_band is the volume consistency's loose side: set volume_consistency > 0 (the default "
-                   "0.02) or loose_band=0")
     out += require(p.void_memory == 0 or p.negative_pressure == "cavitate",
                    f"void_memory acts with negative_pressure=cavitate only, got {p.negative_pressure!r}")
     out += require(p.wall_acceleration <= 1.0, f"wall_acceleration is a share in [0, 1], got {p.wall_acceleration!r}")

@@ -54,7 +54,7 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
           penalty_thickness: float | None = None,
           consistent_integration: bool = RECOMMENDED.consistent_integration,
           linear_consistency: bool = RECOMMENDED.linear_consistency,
-          volume_consistency: float = RECOMMENDED.volume_consistency, loose_band: float = 0.0,
+          volume_consistency: float = RECOMMENDED.volume_consistency, loose_band: float | None = None,
           spacing: float | None = None,
           h_factor: float = 1.3,
           approximation: Approximation | None = None, extra: Sequence[Effect] = (), **options: Any) -> FluidScheme:
@@ -71,7 +71,8 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     integrated exactly, with the free-surface boundary term); ``VolumeConsistency(volume_consistency)``
     unless ``volume_consistency`` is 0 (the density relaxed towards the particles' packing where the
     fluid has a free surface, ``docs/theory/stabilisation.md`` §10), with its loose side past the
-    volume error ``loose_band`` (0, the default: off);
+    volume error ``loose_band`` (``None``, the default: :data:`RECOMMENDED`'s 0.005 when the volume
+    consistency is on; 0: off);
     then ``extra``. The stabilisation defaults are :data:`RECOMMENDED`.
 
     Parameters
@@ -93,6 +94,8 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
         ``integrator``, ``mass``, ``safety``, ``dt_max``, ``periodic`` of the scheme
         (``stabilisation`` is ``"as_listed"``: the effects above are exactly what is asked for).
     """
+    if loose_band is None:
+        loose_band = RECOMMENDED.loose_band if volume_consistency != 0 else 0.0
     if loose_band and volume_consistency == 0:
         raise ValueError(f"water(loose_band={loose_band:g}) is the volume consistency's loose side, which "
                          "volume_consistency=0 leaves out: give volume_consistency > 0 (the default) or loose_band=0")

@@ -7,8 +7,8 @@ gets it added (``stabilisation="auto"``, the default; ``summary.json`` says what
 
 >>> RECOMMENDED.alpha, RECOMMENDED.delta, RECOMMENDED.shifting, RECOMMENDED.linear_consistency
 (0.02, 0.1, 'local', True)
->>> RECOMMENDED.volume_consistency
-0.02
+>>> RECOMMENDED.volume_consistency, RECOMMENDED.loose_band
+(0.02, 0.005)
 >>> [type(e).__name__ for e in recommended_stabilisation()]
 ['MonaghanViscosity', 'DensityDiffusion', 'ParticleShifting', 'LinearConsistentPressure', 'VolumeConsistency']
 
@@ -48,7 +48,10 @@ class StabilisationSet:
     filter every this many steps (0: none), ``consistent_integration`` the constant-only VCI,
     ``linear_consistency`` the pressure's linear fit integrated exactly, ``volume_consistency``
     the rate ε at which the density relaxes towards the particles' packing where the fluid has a
-    free surface (–; 0: off; :class:`~mlsgalerkin.fluid.volume_consistency.VolumeConsistency`).
+    free surface (–; 0: off; :class:`~mlsgalerkin.fluid.volume_consistency.VolumeConsistency`),
+    ``loose_band`` its loose side: past this volume error of the whole fluid (geometric volume over
+    ``Σ M/ρ``, minus one) the density of the particles that are neither deep nor splashes relaxes
+    too (–; 0: off).
     """
 
     alpha: float = 0.02
@@ -58,6 +61,7 @@ class StabilisationSet:
     consistent_integration: bool = False
     linear_consistency: bool = True
     volume_consistency: float = 0.02
+    loose_band: float = 0.005
 
     def as_dict(self) -> dict[str, Any]:
         """The set as keyword arguments of :func:`~mlsgalerkin.fluid.presets.water`."""
@@ -72,10 +76,10 @@ RECOMMENDED = StabilisationSet()
 def recommended_stabilisation() -> list[Effect]:
     """The stabilising effects of :data:`RECOMMENDED`, in the order :func:`water` lists them:
     ``MonaghanViscosity(α)``, ``DensityDiffusion(δ)``, ``ParticleShifting("local")``,
-    ``LinearConsistentPressure()``, ``VolumeConsistency(ε)``."""
+    ``LinearConsistentPressure()``, ``VolumeConsistency(ε, loose_band=e_0)``."""
     return [MonaghanViscosity(RECOMMENDED.alpha), DensityDiffusion(RECOMMENDED.delta),
             ParticleShifting(RECOMMENDED.shifting), LinearConsistentPressure(),
-            VolumeConsistency(RECOMMENDED.volume_consistency)]
+            VolumeConsistency(RECOMMENDED.volume_consistency, loose_band=RECOMMENDED.loose_band)]
 
 
 def is_stabilising(effect: object) -> bool:

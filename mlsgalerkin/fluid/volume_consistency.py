@@ -245,7 +245,7 @@ class VolumeConsistency(Effect):
     below ``surface`` (a free surface), and is idle under
     :class:`~mlsgalerkin.fluid.closed_volume.ClosedVolume`.
 
-    ``loose_band`` ``e_0`` (default 0: off) adds the loose side (module docstring): every
+    ``loose_band`` ``e_0`` (default 0.005; 0: off) adds the loose side (module docstring): every
     ``loose_every`` (10) evaluations with a free surface the fluid's volume error ``e`` (geometric
     volume over ``Σ M/ρ``, minus one; :func:`~mlsgalerkin.fluid.distribution.volume_error`) is
     measured, and while ``e > e_0`` the particles that are neither deep nor splashes (Shepard sum
@@ -257,7 +257,7 @@ class VolumeConsistency(Effect):
     reads = ("shape_functions", "kernel_sum")
 
     def __init__(self, rate: float = 0.02, *, band: float = 0.005, surface: float = 0.9,
-                 loose_band: float = 0.0, loose_every: int = 10, splash: float = 0.5) -> None:
+                 loose_band: float = 0.005, loose_every: int = 10, splash: float = 0.5) -> None:
         self.rate, self.band, self.surface = float(rate), float(band), float(surface)
         self.loose_band, self.loose_every, self.splash = float(loose_band), loose_every, float(splash)
         self.loose_error = 0.0           # the volume error last measured by the loose side (–)
