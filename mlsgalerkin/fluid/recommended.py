@@ -7,8 +7,8 @@ gets it added (``stabilisation="auto"``, the default; ``summary.json`` says what
 
 >>> RECOMMENDED.alpha, RECOMMENDED.delta, RECOMMENDED.shifting, RECOMMENDED.linear_consistency
 (0.02, 0.1, 'local', True)
->>> RECOMMENDED.volume_consistency, RECOMMENDED.loose_band
-(0.02, 0.005)
+>>> RECOMMENDED.volume_consistency, RECOMMENDED.loose_band, RECOMMENDED.droplet_rate
+(0.02, 0.005, 0.1)
 >>> [type(e).__name__ for e in recommended_stabilisation()]
 ['MonaghanViscosity', 'DensityDiffusion', 'ParticleShifting', 'LinearConsistentPressure', 'VolumeConsistency']
 
@@ -51,7 +51,9 @@ class StabilisationSet:
     free surface (–; 0: off; :class:`~mlsgalerkin.fluid.volume_consistency.VolumeConsistency`),
     ``loose_band`` its loose side: past this volume error of the whole fluid (geometric volume over
     ``Σ M/ρ``, minus one) the density of the particles that are neither deep nor splashes relaxes
-    too (–; 0: off).
+    too (–; 0: off), ``droplet_rate`` the rate ``r_d`` at which a droplet (a particle with fewer
+    neighbours than a line of particles) relaxes down to its rest density, in units of ``c0/h``
+    (–; 0: off).
     """
 
     alpha: float = 0.02
@@ -62,6 +64,7 @@ class StabilisationSet:
     linear_consistency: bool = True
     volume_consistency: float = 0.02
     loose_band: float = 0.005
+    droplet_rate: float = 0.1
 
     def as_dict(self) -> dict[str, Any]:
         """The set as keyword arguments of :func:`~mlsgalerkin.fluid.presets.water`."""
@@ -76,10 +79,11 @@ RECOMMENDED = StabilisationSet()
 def recommended_stabilisation() -> list[Effect]:
     """The stabilising effects of :data:`RECOMMENDED`, in the order :func:`water` lists them:
     ``MonaghanViscosity(α)``, ``DensityDiffusion(δ)``, ``ParticleShifting("local")``,
-    ``LinearConsistentPressure()``, ``VolumeConsistency(ε, loose_band=e_0)``."""
+    ``LinearConsistentPressure()``, ``VolumeConsistency(ε, loose_band=e_0, droplet_rate=r_d)``."""
     return [MonaghanViscosity(RECOMMENDED.alpha), DensityDiffusion(RECOMMENDED.delta),
             ParticleShifting(RECOMMENDED.shifting), LinearConsistentPressure(),
-            VolumeConsistency(RECOMMENDED.volume_consistency, loose_band=RECOMMENDED.loose_band)]
+            VolumeConsistency(RECOMMENDED.volume_consistency, loose_band=RECOMMENDED.loose_band,
+                              droplet_rate=RECOMMENDED.droplet_rate)]
 
 
 def is_stabilising(effect: object) -> bool:
