@@ -48,6 +48,19 @@ def test_the_domain_is_the_starting_box_widened_and_open_above():
     assert DomainExit.around(x, 0.1, None, periodic_axes=(0, 1)) is None   # nothing to leave
 
 
+def test_the_domain_follows_walls_that_move_out_of_the_starting_box():
+    # a beam leaning out of the tank carries water beyond the starting box: the bound follows the
+    # wall particles where they are now, and returns to the starting box when they come back
+    x = np.array([[0.0, 0.0], [1.0, 0.5]])
+    d = DomainExit.around(x, 0.1, np.array([0.0, -9.81]))
+    start_upper = d.upper.copy()
+    d.follow_walls(np.array([[1.5, 0.2], [0.5, 0.0]]))
+    assert d.upper[0] == pytest.approx(1.5 + MARGIN_RADII * 0.1) and d.upper[1] == math.inf
+    np.testing.assert_array_equal(d.lower, d.start_lower)        # walls inside the box change nothing
+    d.follow_walls(np.array([[0.9, 0.2]]))
+    np.testing.assert_array_equal(d.upper, start_upper)
+
+
 @pytest.mark.parametrize("dim", [1, 2, 3])
 def test_the_marking_kernel_agrees_with_its_numpy_reference(dim, rng):
     n, n_fluid = 400, 300
@@ -115,6 +128,11 @@ def test_particles_thrown_out_of_the_tank_are_taken_out_of_the_run():
     assert res.summary["fluid"]["diagnostics"]["total_mass_kg"] == pytest.approx(s.M[: s.n_fluid].sum())  # kept
     assert len(caught) == 1 and "left the domain" in str(caught[0].message)
     assert f"{sim.solvers[0].domain_exit.upper[0]:.4g}" in str(caught[0].message)   # the bound it crossed
+    # out of every structure's reach: the contact sees them parked beyond the domain, the rest where they are
+    surface = sim.solvers[0].surface("spray")
+    assert np.all(surface.positions[:, 0] < sim.solvers[0].domain_exit.lower[0])
+    water = sim.solvers[0].surface("water")
+    np.testing.assert_array_equal(water.positions, s.x[s.bodies["water"]])
 
 
 def test_without_it_the_particle_keeps_falling_and_sets_the_step():

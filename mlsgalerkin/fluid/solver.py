@@ -676,10 +676,13 @@ class FluidSolver(Solver):
                 "timeseries.csv follow it", WallPenetrationWarning, stacklevel=2)
 
     def surface(self, body: str) -> Surface:
-        """A fluid body's particles as slave nodes (positions, velocities, masses)."""
+        """A fluid body's particles as slave nodes (positions, velocities, masses); the particles
+        taken out of the run are parked far away (:meth:`DomainExit.search_positions`), out of
+        every structure's reach."""
         s = self._state
         sl = s.bodies[body]
-        return Surface(body, s.x[sl], s.v[sl], np.zeros((0, s.dim), dtype=np.int64), s.M[sl])
+        x = s.x if self.domain_exit is None else self.domain_exit.search_positions(s.x, s)
+        return Surface(body, x[sl], s.v[sl], np.zeros((0, s.dim), dtype=np.int64), s.M[sl])
 
     def clear_surface_forces(self) -> None:
         if self._external is not None:
