@@ -67,3 +67,14 @@ def test_offset_from_a_window():
     assert spring.outside(5.3, (5.1, 5.9)) == 0.0
     assert spring.outside(4.85, (5.1, 5.9)) == pytest.approx(-0.25)
     assert spring.outside(6.0, (5.1, 5.9)) == pytest.approx(0.1)
+
+
+def test_the_late_period_is_read_about_the_drifting_lean():
+    # after 6 s the lean drifts by a degree while the beam swings by 0.3 degrees at 0.2 s (the
+    # default run at 15 mm): the angle crosses its own mean once, its running mean every period
+    t = np.arange(6.0, 7.0, 1e-3)
+    theta = np.radians(-0.5 - 0.9 * (t - 6.0) + 0.3 * np.sin(2 * math.pi * t / 0.2))
+    from mlsgalerkin.analysis.signals import crossing_period
+    assert crossing_period(t, theta)[1] < 2
+    period, periods = spring.late_period(t, theta)
+    assert period == pytest.approx(0.2, rel=0.01) and periods == 3      # read on [6.1, 6.9] s
