@@ -215,13 +215,36 @@ def reanalysed(problem: str, label: str, overrides: dict, runs: Path) -> dict:
     return row
 
 
-def runner(args):
+def previous_rows(out: Path, name: str) -> dict[str, dict]:
+    """The rows of the committed table ``out/<name>.csv`` by case label (``{}`` without one), each
+    marked ``kept_from_table``: what ``--reanalyse`` and ``--rerun`` keep for a case whose run
+    directory is not at hand (its ``run_commit`` column says when it ran)."""
+    table = out / f"{name}.csv"
+    if not table.is_file():
+        return {}
+    return {r["case"]: {**r, "kept_from_table": True} for r in csv.DictReader(table.read_text().splitlines())}
+
+
+def kept_note(rows: list[dict]) -> str:
+    """The sentence a table's notes gain when some of its rows were kept from the previous table."""
+    kept = [r["case"] for r in rows if r.get("kept_from_table")]
+    if not kept:
+        return ""
+    return (" Kept from the previous table, whose run directories were not at hand (run_commit says when "
+            f"each ran, with the code of that commit): {'; '.join(kept)}.")
+
+
+def runner(args, previous: dict[str, dict] | None = None):
     """``run`` or ``reanalysed`` per case: ``--reanalyse`` rebuilds every row from its saved run,
     ``--rerun PATTERN`` runs only the cases whose label matches the regular expression and
-    rebuilds the others."""
+    rebuilds the others; a case not run and without a run directory keeps its row of ``previous``
+    (:func:`previous_rows`) when it has one."""
     def one(problem: str, label: str, overrides: dict, runs: Path) -> dict:
         if args.reanalyse or (args.rerun and not re.search(args.rerun, label)):
-            return reanalysed(problem, label, overrides, runs)
+            row = reanalysed(problem, label, overrides, runs)
+            if row["status"] == "not run" and previous and label in previous:
+                return previous[label]
+            return row
         return run(problem, label, overrides, runs)
     return one
 

@@ -33,7 +33,7 @@ from mlsgalerkin.io import atomic_write, provenance, read_timeseries
 from mlsgalerkin.problem import load_problem
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from verification.fluid_core import runner, write_table
+from verification.fluid_core import kept_note, previous_rows, runner, write_table
 from verification.report_format import produced_by
 
 #: Young's moduli (MPa) of the gate scanned for the least-squares fit of the experiment's record.
@@ -383,19 +383,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", default="verification/results/structure")
     ap.add_argument("--runs", default="results/structure_runs")
     ap.add_argument("--quick", action="store_true", help="tiny runs (a smoke test of this script)")
-    ap.add_argument("--reanalyse", action="store_true", help="rebuild the tables from the run directories in --runs")
+    ap.add_argument("--reanalyse", action="store_true", help="rebuild the tables from the run directories in --runs "
+                    "(a case without one keeps its row of the table in --out)")
     ap.add_argument("--rerun", default=None, metavar="PATTERN",
                     help="run only the cases whose label matches; rebuild the others from their run directories")
     args = ap.parse_args(argv)
     out, runs = Path(args.out), Path(args.runs)
     out.mkdir(parents=True, exist_ok=True)
     runs.mkdir(parents=True, exist_ok=True)
-    one = runner(args)
     for section in SECTIONS if args.section == "all" else (args.section,):
         problem, todo = cases(section, args.quick)
         print(f"section {section} ({problem})", flush=True)
+        one = runner(args, previous_rows(out, section))
         rows = [one(problem, label, overrides, runs) for label, overrides in todo]
-        write_table(out, section, rows, f"{problem}: coupled fluid-structure validation", NOTES[section],
+        write_table(out, section, rows, f"{problem}: coupled fluid-structure validation", NOTES[section] + kept_note(rows),
                     COMMON[:2] + COLUMNS[section] + COMMON[2:], report=REPORT)
         plot(section, out, rows)
         if section == "gate" and not args.quick:

@@ -1,0 +1,23 @@
+"""The verification scripts' partial reruns: a case whose run directory is not at hand keeps its
+row of the committed table, and the table says which rows were kept."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from verification.fluid_core import kept_note, previous_rows, runner
+
+
+def test_a_case_without_its_run_keeps_its_row_of_the_table(tmp_path: Path):
+    (tmp_path / "clamped.csv").write_text("case,status,period_s,run_commit\ndx=2mm,completed,0.599377,162a1b3\n")
+    previous = previous_rows(tmp_path, "clamped")
+    one = runner(argparse.Namespace(reanalyse=True, rerun=None), previous)
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    kept = one("beam_clamped", "dx=2mm", {"dx": 0.002}, runs)
+    assert kept["period_s"] == "0.599377" and kept["run_commit"] == "162a1b3" and kept["kept_from_table"]
+    missing = one("beam_clamped", "dx=1mm", {"dx": 0.001}, runs)      # in no table and never run
+    assert missing["status"] == "not run" and not missing.get("kept_from_table")
+    assert "dx=2mm" in kept_note([kept, missing]) and "dx=1mm" not in kept_note([kept, missing])
+    assert kept_note([missing]) == "" and previous_rows(tmp_path, "spring") == {}
