@@ -40,9 +40,13 @@ def test_damps_inside_the_zone_only():
 def test_takes_energy_out_of_a_sloshing_tank():
     """The energy of the motion, kinetic + potential + compression above the rest state the run
     starts from (``E(t) − (E(0) − K(0))``), at 0.5 s (under half a sloshing period): measured
-    0.673 J/m with the zone against 0.799 J/m without it (0.84; 0.82 without the linear
-    consistency). The kinetic energy alone swings with the acoustic waves the initial flow's
-    compression sends (0.03 to 0.3 J/m within 0.1 s), so one sample of it says little."""
+    0.674 J/m with the zone against 0.778 J/m without it (0.87; 0.84 before the droplets and 0.82
+    without the linear consistency). The kinetic energy alone swings with the acoustic waves the
+    initial flow's compression sends (0.03 to 0.3 J/m within 0.1 s), so one sample of it says
+    little. The volume consistency's loose side is left out of both runs: at these 10 rows the
+    sloshing surface reads volume errors up to 0.97 %, past its 0.5 % band, and its relaxation
+    then takes energy too (0.685 J/m at 0.5 s without the zone; 0.662 with it), which would hide
+    the zone's share (``docs/theory/stabilisation.md`` §10)."""
     def motion_energy(extra):
         fl = FluidBody.block("water", (0.0, 0.0), (0.6, 0.15), 0.015, [Phase("water", 1000.0)])
         c0 = 10 * math.sqrt(2 * 9.81 * 0.15)
@@ -50,7 +54,7 @@ def test_takes_energy_out_of_a_sloshing_tank():
         fl.density[:] = hydrostatic_density(np.full(fl.n, 1000.0), 0.15 - y, 9.81, c0)
         fl.velocity[:, 0] = 0.2 * np.cos(math.pi * fl.positions[:, 0] / 0.6)   # the first sloshing mode's flow
         walls = wall_box((0.0, 0.0), (0.6, 0.3), 0.015, layers=3)
-        scene = Scene([fl, walls], [water(c0, spacing=0.015, extra=extra)], t_end=0.5)
+        scene = Scene([fl, walls], [water(c0, spacing=0.015, loose_band=0.0, extra=extra)], t_end=0.5)
         ts = Simulation(scene).run(progress=False).timeseries
         energy = (np.asarray(ts["kinetic_energy"]) + np.asarray(ts["potential_energy"])
                   + np.asarray(ts["compression_energy"]))
