@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 from mlsgalerkin.fluid import lattice, wall_box
 from mlsgalerkin.fluid.distribution import (
     CLUMP_DISTANCE,
+    PIXELS_PER_SPACING,
     geometric_volume,
     pair_statistics,
     pair_statistics_reference,
@@ -65,16 +66,35 @@ def test_a_block_compressed_by_ten_percent_reads_ten_percent_less(dim, axis):
     exact = (0.9 * (n - 1) + 1.0) / n
     ratio = geometric_volume(x, DX) / (len(x) * DX**dim)
     assert ratio == pytest.approx(0.9, abs=5e-3)
-    assert abs(ratio - exact) <= 1.0 / (4 * n) + 1e-12   # the rounding: at most one pixel (Δx/4) per side
+    assert abs(ratio - exact) <= 1.0 / (PIXELS_PER_SPACING * n) + 1e-12   # the rounding: at most one pixel per side
 
 
 def test_a_block_stretched_apart_is_not_closed_beyond_the_gap():
     x = lattice((0.0, 0.0), (0.2, 0.1), DX)
-    x *= 1.5  # gaps of half a spacing between the cells: the closing fills them
+    x *= 1.4  # gaps of 0.4 spacings between the cells: the closing fills them
     filled = geometric_volume(x, DX)
-    x2 = x * 1.2  # gaps of 0.8 spacings: left open, the union is the cells alone
+    x2 = x * 1.5 / 1.4 * 1.2  # gaps of 0.8 spacings: left open, the union is the cells alone
     assert geometric_volume(x2, DX) == pytest.approx(len(x) * DX**2, rel=1e-12)
-    assert filled > 2.0 * len(x) * DX**2
+    assert filled > 1.8 * len(x) * DX**2
+
+
+@pytest.mark.parametrize("gap, closed_share", [(0.35, 1.0), (0.45, 0.75), (0.5, 0.5), (0.55, 0.25), (0.65, 0.0)])
+def test_a_gap_is_closed_below_half_a_spacing_on_average_over_the_phase(gap, closed_share):
+    """Two particles ``(1 + w) Δx`` apart along x, far above a lattice block that sets the pixel
+    grid, at 100 phases against the pixels: the gap between their cells (``⌊5w⌋`` or ``⌈5w⌉``
+    pixels) is closed always below 0.4 spacings, never from 0.6, and in a share ``3 − 5w`` of the
+    phases between (:func:`closing_radius`): on average below half a spacing. (At four pixels per
+    spacing and the same box the average threshold was 0.625 spacings.)"""
+    block = lattice((0.0, 0.0), (0.1, 0.08), DX)
+    pixel = DX / PIXELS_PER_SPACING
+    shares = []
+    for phase in (np.arange(100) + 0.5) / 100:
+        x0 = 0.5 * DX + 3 * DX + phase * pixel            # the pair's left cell face at this phase of the grid
+        pair = np.array([[x0, 0.5003], [x0 + (1.0 + gap) * DX, 0.5003]])   # y off the pixel centres
+        v = geometric_volume(np.vstack([block, pair]), DX) / DX**2 - len(block) - 2
+        assert v == pytest.approx(0.0, abs=1e-9) or v == pytest.approx(gap, abs=1.01 / PIXELS_PER_SPACING)
+        shares.append(v > 1e-9)
+    assert np.mean(shares) == pytest.approx(closed_share, abs=0.03)
 
 
 def test_splashes_count_their_own_cell():
