@@ -21,3 +21,15 @@ def test_a_case_without_its_run_keeps_its_row_of_the_table(tmp_path: Path):
     assert missing["status"] == "not run" and not missing.get("kept_from_table")
     assert "dx=2mm" in kept_note([kept, missing]) and "dx=1mm" not in kept_note([kept, missing])
     assert kept_note([missing]) == "" and previous_rows(tmp_path, "spring") == {}
+
+
+def test_a_case_run_by_the_runner_records_the_commit_its_summary_names(tmp_path: Path):
+    """The summary a run returns in memory has no provenance (it is added as ``summary.json`` is
+    written), so the row's ``run_commit`` is read from the file: empty before, in every table run
+    since partial reruns came."""
+    import json
+
+    one = runner(argparse.Namespace(reanalyse=False, rerun=None), {})
+    row = one("hydrostatic", "tiny", {"dx": 0.1, "t_end": 0.002}, tmp_path)
+    written = json.loads((Path(row["run_dir"]) / "summary.json").read_text())["provenance"].get("git_commit")
+    assert row["status"] == "completed" and row["run_commit"] == written

@@ -167,7 +167,7 @@ def run(problem: str, label: str, overrides: dict, runs: Path) -> dict:
         row["particles"] = int(result.state.fluid.n)
         row["fluid_particles"] = int(result.state.fluid.n_fluid)
         row["run_dir"] = str(runs / safe)
-        row["run_commit"] = result.summary.get("provenance", {}).get("git_commit")
+        row["run_commit"] = written_commit(runs / safe)
         row.update({k: v for k, v in res.items() if isinstance(v, (int, float, str)) and k != "headline"})
         row["headline"] = res.get("headline", "")
     except Exception as err:  # a diverged or failed case is a result too
@@ -177,6 +177,15 @@ def run(problem: str, label: str, overrides: dict, runs: Path) -> dict:
         row["wall_s_per_simulated_s"] = row["wall_time_s"] / row["t_reached_s"]
     print(f"  {problem} {label}: {row['status']}, {row['wall_time_s']:.0f} s. {row.get('headline', '')}", flush=True)
     return row
+
+
+def written_commit(run_dir: Path) -> str | None:
+    """The commit of the code a run ran (``summary.json``'s provenance; the summary a run returns
+    in memory has none, it is added as the file is written)."""
+    try:
+        return json.loads((run_dir / "summary.json").read_text()).get("provenance", {}).get("git_commit")
+    except (OSError, ValueError):
+        return None
 
 
 def reanalysed(problem: str, label: str, overrides: dict, runs: Path) -> dict:
