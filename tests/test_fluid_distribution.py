@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 
 from mlsgalerkin.fluid import lattice, wall_box
 from mlsgalerkin.fluid.distribution import (
+    CLOSED_GAP,
     CLUMP_DISTANCE,
     PIXELS_PER_SPACING,
     geometric_volume,
@@ -78,13 +79,12 @@ def test_a_block_stretched_apart_is_not_closed_beyond_the_gap():
     assert filled > 1.8 * len(x) * DX**2
 
 
-@pytest.mark.parametrize("gap, closed_share", [(0.35, 1.0), (0.45, 0.75), (0.5, 0.5), (0.55, 0.25), (0.65, 0.0)])
-def test_a_gap_is_closed_below_half_a_spacing_on_average_over_the_phase(gap, closed_share):
+@pytest.mark.parametrize("gap, closed_share", [(0.45, 1.0), (0.55, 0.8), (0.625, 0.5), (0.7, 0.2), (0.8, 0.0)])
+def test_a_gap_is_closed_below_its_threshold_on_average_over_the_phase(gap, closed_share):
     """Two particles ``(1 + w) Δx`` apart along x, far above a lattice block that sets the pixel
-    grid, at 100 phases against the pixels: the gap between their cells (``⌊5w⌋`` or ``⌈5w⌉``
-    pixels) is closed always below 0.4 spacings, never from 0.6, and in a share ``3 − 5w`` of the
-    phases between (:func:`closing_radius`): on average below half a spacing. (At four pixels per
-    spacing and the same box the average threshold was 0.625 spacings.)"""
+    grid, at 100 phases against the pixels: the gap between their cells (``⌊4w⌋`` or ``⌈4w⌉``
+    pixels) is closed always below 0.5 spacings, never from 0.75, and in a share ``3 − 4w`` of the
+    phases between (:func:`closing_radius`): on average below ``CLOSED_GAP`` = 0.625 spacings."""
     block = lattice((0.0, 0.0), (0.1, 0.08), DX)
     pixel = DX / PIXELS_PER_SPACING
     shares = []
@@ -95,6 +95,7 @@ def test_a_gap_is_closed_below_half_a_spacing_on_average_over_the_phase(gap, clo
         assert v == pytest.approx(0.0, abs=1e-9) or v == pytest.approx(gap, abs=1.01 / PIXELS_PER_SPACING)
         shares.append(v > 1e-9)
     assert np.mean(shares) == pytest.approx(closed_share, abs=0.03)
+    assert CLOSED_GAP == 0.625
 
 
 def test_splashes_count_their_own_cell():

@@ -209,13 +209,14 @@ def loose_top_tank(loose_band: float, t_end: float = 0.3, stretch: float = 1.38,
 
 def test_the_loose_side_closes_a_loose_surface_layer_and_without_it_the_layer_stays():
     # the three top rows 1.38 spacings apart (gaps of 0.38 spacings, which the geometric volume
-    # closes at every pixel phase): a volume error of +10 % at the start. Their sums are cut by the
+    # closes at every pixel phase; 1.5, whose gaps of half a spacing sit at the edge of the
+    # closing's threshold, read 12.5 %): a volume error of +10 % at the start. Their sums are cut by the
     # surface, so the deep mean does not see them; the loose side does
     on, res_on = loose_top_tank(0.01)
     off, res_off = loose_top_tank(0.0)
     err_on, err_off = (np.asarray(r.timeseries["volume_error"]) for r in (res_on, res_off))
     assert err_on[0] == err_off[0] == pytest.approx(0.10, abs=0.01)
-    assert err_off[-1] > 0.05                  # measured 6.8 % at 0.3 s: the layer is held up
+    assert err_off[-1] > 0.05                  # measured 6.3 % at 0.3 s: the layer is held up
     assert err_on[-1] < 0.035                  # measured 1.8 % at 0.3 s, closing towards the band
     report = on.summary()
     assert report["loose_volume_error_largest"] == pytest.approx(err_on[0], abs=0.005)

@@ -18,12 +18,16 @@ filter over a box of :math:`2r + 1` pixels (it fills every gap up to :math:`2r` 
 leaves convex shapes as they were), :math:`r = \operatorname{round}((g k - \tfrac12)/2)`
 (:func:`closing_radius`). A gap :math:`w\,\Delta x` wide holds :math:`\lfloor wk \rfloor` or
 :math:`\lceil wk \rceil` pixels, so the closing's threshold is a pixel wide and set by the
-phase: it closes a gap narrower than :math:`(2r + \tfrac12)/k` spacings on average, which is
-:math:`g = \tfrac12` at :math:`k = 5`, :math:`r = 1`. (At four pixels per spacing and the same
-box, until 2026-12-04, it was 0.625 spacings: where the fluid is torn into sheets and chains
-with gaps of half a spacing, every 0.1 spacing of threshold moved the volume by about 1.2 %, and
-``beam_clamped``'s splashing frames at 4 mm read 0.5–1.1 % more than at 32 pixels per spacing;
-a jittered lattice, whose cracks stay below 0.5 spacings, reads the same at every resolution.)
+phase: a gap narrower than :math:`(2r + \tfrac12)/k` spacings is closed on average,
+:math:`g = 0.625` at :math:`k = 4`, :math:`r = 1` (always below 0.5, never from 0.75 spacings).
+(Documented as half a spacing until 2026-12-04.) The threshold is a choice, and it matters where
+the fluid is disordered or torn: a lattice jittered by ±0.3 Δx, whose volume is its cells', reads
+−0.18 % at 0.625 but −0.98 % with a sharp threshold at 0.5 (32 pixels per spacing), whose
+closing leaves its cracks of 0.5–0.6 Δx open; ``beam_clamped``'s torn sheets at 4 mm read
+0.3–1.7 % more at 0.625 than at a sharp 0.5 (1.0 % on average over its first 1.45 s). The pixel-wide threshold also scatters the
+reading from sample to sample as gaps move through it: a standard deviation of 0.3–0.4 % against
+32 pixels per spacing in those flows (a sample of ``beam_clamped``'s volume error can jump by 0.9 %
+in a millisecond). ``tests/test_fluid_distribution.py`` measures the threshold.
 It compares with the
 volume the particles' masses and densities say, :math:`\sum_f M_f/\rho_f`; their ratio minus one
 is the **volume error**. A fluid that packs tighter than :math:`M/\rho` (pairing, clumping, a
@@ -37,10 +41,9 @@ seeds the mean error is below 0.05 %, its standard deviation 0.18 % for 800 part
 block of 60 particles along one axis compressed by 10 % along it reads 9.75 % less (its outer
 half cells keep their size: :math:`(0.9 \cdot 59 + 1)/60`, within one pixel); an isolated particle
 (a splash) its own cell exactly; a disc cut from a lattice its cells exactly (the closing leaves
-the one-spacing steps of its boundary open). Cost (one thread, 2 shared cores, 2026-12-04):
-20 000 particles in a 2D block 7.6 ms (5.7 ms at four pixels per spacing), 100 000 in a jittered
-3D block 0.23 s (0.13 s), an 800-particle dam break spread over a 0.3 m × 0.45 m tank 1.7 ms (at
-four pixels per spacing; the grid spans the particles' bounding box; the
+the one-spacing steps of its boundary open). Cost (one thread, 2 shared cores): 20 000 particles
+in a 2D block 5–9 ms, 100 000 in a jittered 3D block 0.13–0.18 s, an 800-particle dam break
+spread over a 0.3 m × 0.45 m tank 1.7 ms (the grid spans the particles' bounding box; the
 closing, two :mod:`scipy.ndimage` filters over it, is most of the cost): cheap enough for a
 time-series row, too dear for every step. :func:`geometric_volume` builds one grid when the
 fluid fills a fair share of its bounding box (:data:`SINGLE_GRID_FILL`), and otherwise only the
@@ -98,13 +101,12 @@ __all__ = [
     "volume_error",
 ]
 
-#: Pixels per spacing ``k`` of the grid the union of cells is measured on: with the closing's
-#: radius of :func:`closing_radius` (one pixel), five pixels per spacing close a gap narrower than
-#: :data:`CLOSED_GAP` on average over the pixel phase (module docstring).
-PIXELS_PER_SPACING = 5
-#: Gaps between cells up to this many spacings wide are closed (a lattice jittered by ±0.2 Δx
-#: opens cracks up to 0.4 Δx).
-CLOSED_GAP = 0.5
+#: Pixels per spacing ``k`` of the grid the union of cells is measured on.
+PIXELS_PER_SPACING = 4
+#: Gaps between cells narrower than this many spacings are closed, on average over the pixel
+#: phase (:func:`closing_radius`; a lattice jittered by ±0.2 Δx opens cracks up to 0.4 Δx, one
+#: jittered by ±0.3 Δx up to 0.6 Δx).
+CLOSED_GAP = 0.625
 #: The largest grid (pixels or voxels of the bounding box); above it ``k`` is halved (down to 2).
 MAX_PIXELS = 40_000_000
 #: Pixels per tile side of :func:`geometric_volume`, by dimension (1D, 2D, 3D): 65 536 pixels
@@ -158,7 +160,7 @@ def closing_radius(closed_gap: float, pixels_per_spacing: int) -> int:
     gap of at most ``2r`` pixels, and a gap ``w Δx`` wide holds ``⌊w k⌋`` or ``⌈w k⌉`` pixels,
     so it is closed always below ``2r/k`` spacings, never from ``(2r + 1)/k``, and in a share
     ``2r + 1 − w k`` of the phases between: on average below ``(2r + ½)/k``, which is ``g``
-    when ``k = (4r + 1)/(2g)`` (``k = 5``, ``r = 1`` at ``g = ½``)."""
+    when ``k = (4r + 1)/(2g)`` (``k = 4``, ``r = 1`` at ``g = 0.625``)."""
     return max(1, int(round((closed_gap * pixels_per_spacing - 0.5) / 2.0)))
 
 

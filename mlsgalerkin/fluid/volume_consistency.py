@@ -91,8 +91,7 @@ They lose their pressure, and gravity closes the gaps until the error is back wi
 Measured in ``beam_clamped`` at its default Δx = 4 mm with ``e_0 = 0.005``
 (``docs/theory/stabilisation.md`` §10): the largest error is 2.05 % (6.52 % without), and 0.87 %
 on average after 1.5 s; with the droplets below, 2.27 % and 0.67 %. Both are in the recommended
-set since 2026-12-04. (Those numbers are on the geometric volume's former four pixels per
-spacing, which read splashing flows about 1 % high; on five, with both, 1.60 % and 0.50 %.)
+set since 2026-12-04.
 
 *Droplets* (``droplet_rate``). A particle whose Shepard sum is below ``splash · c_ref`` (0.5 of
 the lattice's: fewer neighbours than a line of particles has) is a droplet in air, whose pressure
