@@ -161,7 +161,7 @@ def closing_radius(closed_gap: float, pixels_per_spacing: int) -> int:
     so it is closed always below ``2r/k`` spacings, never from ``(2r + 1)/k``, and in a share
     ``2r + 1 − w k`` of the phases between: on average below ``(2r + ½)/k``, which is ``g``
     when ``k = (4r + 1)/(2g)`` (``k = 4``, ``r = 1`` at ``g = 0.625``)."""
-    return max(1, int(round((closed_gap * pixels_per_spacing - 0.5) / 2.0)))
+    return max(1, round((closed_gap * pixels_per_spacing - 0.5) / 2.0))
 
 
 def grid_lower_corner(x: NDArray[np.float64], spacing: float, pixel: float) -> NDArray[np.float64]:
