@@ -209,9 +209,8 @@ def loose_top_tank(loose_band: float, t_end: float = 0.3, stretch: float = 1.38,
 
 def test_the_loose_side_closes_a_loose_surface_layer_and_without_it_the_layer_stays():
     # the three top rows 1.38 spacings apart (gaps of 0.38 spacings, which the geometric volume
-    # closes at every pixel phase; 1.5, whose gaps of half a spacing sit at the edge of the
-    # closing's threshold, read 12.5 %): a volume error of +10 % at the start. Their sums are cut by the
-    # surface, so the deep mean does not see them; the loose side does
+    # closes at every pixel phase): a volume error of +10 % at the start. Their sums are cut by
+    # the surface, so the deep mean does not see them; the loose side does
     on, res_on = loose_top_tank(0.01)
     off, res_off = loose_top_tank(0.0)
     err_on, err_off = (np.asarray(r.timeseries["volume_error"]) for r in (res_on, res_off))

@@ -24,11 +24,11 @@ phase: a gap narrower than :math:`(2r + \tfrac12)/k` spacings is closed on avera
 the fluid is disordered or torn: a lattice jittered by ±0.3 Δx, whose volume is its cells', reads
 −0.18 % at 0.625 but −0.98 % with a sharp threshold at 0.5 (32 pixels per spacing), whose
 closing leaves its cracks of 0.5–0.6 Δx open; ``beam_clamped``'s torn sheets at 4 mm read
-0.3–1.7 % more at 0.625 than at a sharp 0.5 (1.0 % on average over its first 1.45 s). The pixel-wide threshold also scatters the
-reading from sample to sample as gaps move through it: a standard deviation of 0.3–0.4 % against
-32 pixels per spacing in those flows (a sample of ``beam_clamped``'s volume error can jump by 0.9 %
-in a millisecond). ``tests/test_fluid_distribution.py`` measures the threshold.
-It compares with the
+0.3–1.7 % more at 0.625 than at a sharp 0.5 (1.0 % on average over its first 1.45 s). The
+pixel-wide threshold also scatters the reading from sample to sample as gaps move through it: a
+standard deviation of 0.3–0.4 % against 32 pixels per spacing in those flows (a sample of
+``beam_clamped``'s volume error can jump by 0.9 % in a millisecond).
+``tests/test_fluid_distribution.py`` measures the threshold. It compares with the
 volume the particles' masses and densities say, :math:`\sum_f M_f/\rho_f`; their ratio minus one
 is the **volume error**. A fluid that packs tighter than :math:`M/\rho` (pairing, clumping, a
 collapsing column) reads a negative error, one that opens voids a positive one.
