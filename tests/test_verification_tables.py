@@ -4,6 +4,7 @@ row of the committed table, and the table says which rows were kept."""
 from __future__ import annotations
 
 import argparse
+import csv
 from pathlib import Path
 
 from verification.fluid_core import kept_note, previous_rows, runner
@@ -33,3 +34,25 @@ def test_a_case_run_by_the_runner_records_the_commit_its_summary_names(tmp_path:
     row = one("hydrostatic", "tiny", {"dx": 0.1, "t_end": 0.002}, tmp_path)
     written = json.loads((Path(row["run_dir"]) / "summary.json").read_text())["provenance"].get("git_commit")
     assert row["status"] == "completed" and row["run_commit"] == written
+
+
+def test_every_fluid_core_section_keeps_the_rows_whose_runs_are_not_at_hand(tmp_path: Path):
+    """A partial ``--rerun`` (here ``--reanalyse`` with no run directory at all) writes each
+    section's committed rows back, marked as kept, instead of rows reading "not run"."""
+    from verification import fluid_core
+
+    out, runs = tmp_path / "tables", tmp_path / "runs"
+    out.mkdir()
+    runs.mkdir()
+    args = argparse.Namespace(reanalyse=True, rerun=None, quick=True, finest=80)
+    for section in ("rest", "gravity_lid", "dam_break"):
+        table = section
+        cases = {"rest": fluid_core.rest_cases, "gravity_lid": fluid_core.gravity_lid_cases}.get(section)
+        labels = [label for label, _ in cases(True)] if cases else ["a/dx=10"]
+        with (out / f"{table}.csv").open("w", newline="") as f:
+            csv.writer(f).writerows([["case", "status", "steps", "run_commit"],
+                                     *([label, "completed", 123, "abc1234"] for label in labels)])
+        getattr(fluid_core, f"section_{section}")(args, out, runs)
+        text = (out / f"{table}.md").read_text()
+        assert "not run" not in text and "Kept from the previous table" in text, section
+        assert all(label in text for label in labels) and "abc1234" in text, section

@@ -260,7 +260,12 @@ def runner(args, previous: dict[str, dict] | None = None):
 
 def write_table(out: Path, name: str, rows: list[dict], title: str, notes: str, columns: list[str],
                 report: str = "fluid_core") -> None:
-    keys = [c for c in columns if any(c in r for r in rows)]
+    """``out/<name>.csv`` and ``.md``: the given columns of each row (those some row has), with
+    ``run_commit`` last when the rows name their runs' commits, and the notes saying which rows
+    were kept from the previous table (:func:`kept_note`)."""
+    notes = notes.strip() + kept_note(rows)
+    columns = [*columns, *(["run_commit"] if "run_commit" not in columns else [])]
+    keys = [c for c in columns if any(r.get(c) not in (None, "") for r in rows)]
     atomic_write(out / f"{name}.csv", csv_text(keys, [[format_cell(r.get(k, "")) for k in keys] for r in rows]))
     lines = [f"# {title}", "", notes.strip(), "", "| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
     for r in rows:
@@ -280,7 +285,7 @@ IMPACT_COLUMNS = ["case", "status", "t_reached_s", "fluid_particles", "steps", "
 
 
 def section_impact(args, out: Path, runs: Path) -> None:
-    one = runner(args)
+    one = runner(args, previous_rows(out, "impact"))
     rows = [one("dam_break_impact", label, ov, runs) for label, ov in impact_cases(args.quick, args.finest)]
     write_table(out, "impact", rows, "Dam break with wall impact (Zhou et al. 1999 tank) against De Courcy et al. (2024)",
                 """Pressure p/(rho g H) at the four sensors of the downstream wall against the converged
@@ -300,7 +305,7 @@ SCATTER_MEASURES = ("P1_peak", "P1_peak_error", "P1_peak_raw", "rms_deviation_P1
 
 
 def section_scatter(args, out: Path, runs: Path) -> None:
-    one = runner(args)
+    one = runner(args, previous_rows(out, "impact_scatter"))
     rows = [one("dam_break_impact", label, ov, runs) for label, ov in scatter_cases(args.quick, args.finest)]
     table = out / "impact.csv"
     if table.is_file():      # the impact section's runs are the unperturbed members of each family
@@ -403,7 +408,8 @@ def section_dam_break(args, out: Path, runs: Path) -> None:
     a = 2.25 * 0.0254
     cases = [("a/dx=10", {"dx": a / 10, "t_end": 0.1})] if args.quick else \
         [(f"a/dx={n}", {"dx": a / n}) for n in (20, 40, 80)]
-    rows = [run("dam_break", label, ov, runs) for label, ov in cases]
+    one = runner(args, previous_rows(out, "dam_break"))
+    rows = [one("dam_break", label, ov, runs) for label, ov in cases]
     write_table(out, "dam_break", rows, "Dam break (Martin & Moyce 1952) through the wall impact",
                 """Surge front against Martin & Moyce for T <= 3; the runs continue through the wall
 impact (t = 0.27 s) and the run-up to the problem's default end, t = 0.4 s (T = 7.4).""",
@@ -412,7 +418,7 @@ impact (t = 0.27 s) and the run-up to the problem's default end, t = 0.4 s (T = 
 
 
 def section_gravity(args, out: Path, runs: Path) -> None:
-    one = runner(args)
+    one = runner(args, previous_rows(out, "gravity"))
     rows = [one("gravity_current", label, ov, runs) for label, ov in gravity_cases(args.quick)]
     write_table(out, "gravity", rows, "Gravity current head speed: the 3 x 3 matrix in two tanks, two resolutions",
                 """Head speed against 0.4 sqrt(g D drho/rho0) (Rottman & Simpson 1983). Goal: within 10 %,
@@ -432,7 +438,7 @@ lid's pressure level, 1 rho_heavy g D at the start). largest_volume_error: the r
 
 
 def section_gravity_lid(args, out: Path, runs: Path) -> None:
-    one = runner(args)
+    one = runner(args, previous_rows(out, "gravity_lid"))
     rows = [one("gravity_current", label, ov, runs) for label, ov in gravity_lid_cases(args.quick)]
     write_table(out, "gravity_lid", rows, "The deep weakly stratified lock exchange under the lid: both fronts",
                 """D = 0.12 m, drho/rho0 = 0.1 (and 0.03), the problem's 0.34 m tank (0.339 m simulated). Head
@@ -462,7 +468,15 @@ def plot_gravity_lid(out: Path, rows: list[dict]) -> None:
 
     from mlsgalerkin.plots.frames import figure_png
 
-    done = [r for r in rows if isinstance(r.get("light_froude_number"), float)]
+    def number(value) -> float | None:       # a fresh row holds floats, a kept row its table's text
+        try:
+            return float(value)
+        except (TypeError, ValueError):
+            return None
+
+    done = [{**r, "froude_number": number(r.get("froude_number")),
+             "light_froude_number": number(r.get("light_froude_number"))} for r in rows]
+    done = [r for r in done if r["froude_number"] is not None and r["light_froude_number"] is not None]
     if not done:
         return
     y = np.arange(len(done))[::-1]
@@ -481,7 +495,7 @@ def plot_gravity_lid(out: Path, rows: list[dict]) -> None:
 
 
 def section_rest(args, out: Path, runs: Path) -> None:
-    one = runner(args)
+    one = runner(args, previous_rows(out, "rest"))
     rows = [one("stratified_rest", label, ov, runs) for label, ov in rest_cases(args.quick)]
     write_table(out, "rest", rows, "Two-layer tank at rest (1000/1030 kg/m3)",
                 """Largest spurious speed over sqrt(g' D) and the RMS pressure deviation from the
@@ -495,7 +509,7 @@ density of its new height: the melted lattice of a mixing zone, at rest.""",
 
 def section_drop(args, out: Path, runs: Path) -> None:
     rows = []
-    one = runner(args)
+    one = runner(args, previous_rows(out, "drop"))
     for label, ov in drop_cases(args.quick):
         for mode in ("cavitate", "free_surface", "allow"):
             rows.append(one("drop_impact", f"{label}, negative_pressure={mode}",
@@ -530,7 +544,7 @@ GRAVITY_ABLATION = [
 
 def section_ablation(args, out: Path, runs: Path) -> None:
     rows = []
-    one = runner(args)
+    one = runner(args, previous_rows(out, "ablation"))
     base_impact = {"dx": 0.06, "t_end": 0.6} if args.quick else {"dx": 0.6 / 40}
     for label, ov in ABLATION[:2] if args.quick else ABLATION:
         rows.append(one("dam_break_impact", f"impact H/dx={0.6 / base_impact['dx']:.0f}: {label}",

@@ -33,7 +33,7 @@ from mlsgalerkin.io import atomic_write, provenance, read_timeseries
 from mlsgalerkin.problem import load_problem
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from verification.fluid_core import kept_note, previous_rows, runner, write_table
+from verification.fluid_core import previous_rows, runner, write_table
 from verification.report_format import produced_by
 
 #: Young's moduli (MPa) of the gate scanned for the least-squares fit of the experiment's record.
@@ -396,7 +396,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"section {section} ({problem})", flush=True)
         one = runner(args, previous_rows(out, section))
         rows = [one(problem, label, overrides, runs) for label, overrides in todo]
-        write_table(out, section, rows, f"{problem}: coupled fluid-structure validation", NOTES[section] + kept_note(rows),
+        write_table(out, section, rows, f"{problem}: coupled fluid-structure validation", NOTES[section],
                     COMMON[:2] + COLUMNS[section] + COMMON[2:], report=REPORT)
         plot(section, out, rows)
         if section == "gate" and not args.quick:
