@@ -263,7 +263,8 @@ def write_table(out: Path, name: str, rows: list[dict], title: str, notes: str, 
     """``out/<name>.csv`` and ``.md``: the given columns of each row (those some row has), with
     ``run_commit`` last when the rows name their runs' commits, and the notes saying which rows
     were kept from the previous table (:func:`kept_note`)."""
-    notes = notes.strip() + kept_note(rows)
+    kept = kept_note(rows).strip()
+    notes = notes.strip() + (f"\n\n{kept}" if kept else "")
     columns = [*columns, *(["run_commit"] if "run_commit" not in columns else [])]
     keys = [c for c in columns if any(r.get(c) not in (None, "") for r in rows)]
     atomic_write(out / f"{name}.csv", csv_text(keys, [[format_cell(r.get(k, "")) for k in keys] for r in rows]))
