@@ -240,7 +240,8 @@ def kept_note(rows: list[dict]) -> str:
     if not kept:
         return ""
     return (" Kept from the previous table, whose run directories were not at hand (run_commit says when "
-            f"each ran, with the code of that commit): {'; '.join(kept)}.")
+            "each ran, with the code of that commit, where the previous table recorded it; otherwise its "
+            f"provenance line does): {'; '.join(kept)}.")
 
 
 def runner(args, previous: dict[str, dict] | None = None):
