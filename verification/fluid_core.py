@@ -533,6 +533,7 @@ ABLATION = [
     ("no shifting", {"shifting": "off"}),
     ("alpha = 0", {"alpha": 0.0}),
     ("tension allowed", {"negative_pressure": "allow"}),
+    ("no volume consistency (nor its loose side and droplets)", {"volume_consistency": 0.0}),
 ]
 GRAVITY_ABLATION = [
     ("all terms (defaults)", {}),
@@ -559,8 +560,9 @@ def section_ablation(args, out: Path, runs: Path) -> None:
                 """Dam break with impact (H/dx = 40, to T = 7) and the weakly stratified gravity current
 (D = 0.04 m, drho/rho0 = 0.1, 20 rows, the scaled tank): completes or not, the measures of each
 problem, the largest geometric-volume error and the cost. The defaults are the one recommended set
-(alpha = 0.02, delta = 0.1, local shifting, linear consistency), with the gravity current's own
-alpha = 0.01 and its lid's ClosedVolume.""",
+(alpha = 0.02, delta = 0.1, local shifting, linear consistency, the volume consistency with its
+loose side and droplets), with the gravity current's own alpha = 0.01 and its lid's ClosedVolume
+(under which the volume consistency is idle).""",
                 ["case", "status", "t_reached_s", "steps", "P1_peak", "P1_peak_T", "P1_peak_raw", "rms_deviation_P1",
                  "rms_deviation_P3", "noise_rms_P1", "noise_rms_P3", "energy_lost_fraction", "relative_error",
                  "largest_volume_error", "max_clumped_pairs", "max_penetration_dx", "wall_time_s",
