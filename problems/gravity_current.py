@@ -38,12 +38,16 @@ Without it the collocated continuity equation lost about 1 % of the volume per s
 lid, the lid's pressure level ran out in about 0.8 s, and the top row went into tension and
 clumped (``lid_clumping.md``; ``docs/theory/stabilisation.md`` §9).
 
-Measured (``verification/results/fluid_core/gravity.md``, 2026-12-02; the 3 × 3 matrix of ``D`` =
-0.04, 0.06, 0.12 m and ``Δρ/ρ0`` = 0.1, 0.5, 1): every run completes; within 10 % of the formula
-are 9 of 9 in the tank scaled with the depth at 20 rows (−9.2 to +7.1 %), 8 of 9 in this 0.34 m
-tank at 20 rows (``D = 0.04`` m, ``Δρ/ρ0 = 0.1``: +15.0 %) and 5 of 9 at the default ``Δx = 3``
-mm, which is 13 rows at ``D = 0.04`` m (−20.3, −14.1 and −12.6 %) and 40 at 0.12 m (+18.5 % at
-``Δρ/ρ0 = 0.1``). That deep weakly stratified case does not converge under the lid, and its
+Measured (``verification/results/fluid_core/gravity.md``, rerun 2026-12-04 at one numba thread a
+run; the 3 × 3 matrix of ``D`` = 0.04, 0.06, 0.12 m and ``Δρ/ρ0`` = 0.1, 0.5, 1): every run
+completes; within 10 % of the formula are 9 of 9 in the tank scaled with the depth at 20 rows
+(−9.2 to +3.6 %), 9 of 9 in this 0.34 m tank at 20 rows (−9.6 to +9.2 %) and 5 of 9 at the
+default ``Δx = 3`` mm, which is 13 rows at ``D = 0.04`` m (−17.6, −15.8 and −12.5 %) and 40 at
+0.12 m (+20.5 % at ``Δρ/ρ0 = 0.1``). At the recommended set's ``α = 0.02``: 7 of 9 in the scaled
+tank (−10.0 and −10.3 % at ``Δρ/ρ0`` = 1 and 0.5). (The table of 2026-12-02, run on two threads
+before the runs became independent of the thread count, read 9 / 8 / 5 of 9; single heads moved
+by up to 7 points, D = 0.06 m, ``Δρ/ρ0 = 0.1`` from +0.9 to −6.1 %, the chaotic exchange's
+sensitivity to round-off.) That deep weakly stratified case does not converge under the lid, and its
 exchange is lopsided at every resolution (``verification/results/fluid_core/gravity_lid.md``,
 ``python verification/fluid_core.py --section gravity_lid``; ``analyse`` reports both fronts:
 ``light_froude_number`` and ``front_speed_ratio``, the light front's speed over the heavy head's,
