@@ -8,11 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from mlsgalerkin.fluid import FluidBody, Phase, TaitPressure, hydrostatic_density, wall_box, water
+from mlsgalerkin.fluid import FluidBody, Phase, TaitPressure
 from mlsgalerkin.fluid.scheme import FluidScheme
 from mlsgalerkin.fluid.sponge import SpongeZone, sponge_rate
 from mlsgalerkin.scene import Scene
 from mlsgalerkin.simulation import Simulation
+from verification.sloshing_energy import sloshing_scene
 
 
 def test_rate_profile():
@@ -49,13 +50,7 @@ def test_takes_energy_out_of_a_sloshing_tank():
     without the zone; 0.662 with it) and would blur the zone's share; it does not damp the wave
     (``verification/sloshing_energy.py``, ``docs/theory/stabilisation.md`` §10)."""
     def motion_energy(extra):
-        fl = FluidBody.block("water", (0.0, 0.0), (0.6, 0.15), 0.015, [Phase("water", 1000.0)])
-        c0 = 10 * math.sqrt(2 * 9.81 * 0.15)
-        y = fl.positions[:, 1]
-        fl.density[:] = hydrostatic_density(np.full(fl.n, 1000.0), 0.15 - y, 9.81, c0)
-        fl.velocity[:, 0] = 0.2 * np.cos(math.pi * fl.positions[:, 0] / 0.6)   # converging: the symmetric second mode
-        walls = wall_box((0.0, 0.0), (0.6, 0.3), 0.015, layers=3)
-        scene = Scene([fl, walls], [water(c0, spacing=0.015, loose_band=0.0, extra=extra)], t_end=0.5)
+        scene = sloshing_scene(0.015, loose_band=0.0, t_end=0.5, extra=extra)
         ts = Simulation(scene).run(progress=False).timeseries
         energy = (np.asarray(ts["kinetic_energy"]) + np.asarray(ts["potential_energy"])
                   + np.asarray(ts["compression_energy"]))

@@ -46,13 +46,12 @@ def test_every_fluid_core_section_keeps_the_rows_whose_runs_are_not_at_hand(tmp_
     runs.mkdir()
     args = argparse.Namespace(reanalyse=True, rerun=None, quick=True, finest=80)
     for section in ("rest", "gravity_lid", "dam_break"):
-        table = section
         cases = {"rest": fluid_core.rest_cases, "gravity_lid": fluid_core.gravity_lid_cases}.get(section)
         labels = [label for label, _ in cases(True)] if cases else ["a/dx=10"]
-        with (out / f"{table}.csv").open("w", newline="") as f:
+        with (out / f"{section}.csv").open("w", newline="") as f:
             csv.writer(f).writerows([["case", "status", "steps", "run_commit"],
                                      *([label, "completed", 123, "abc1234"] for label in labels)])
         getattr(fluid_core, f"section_{section}")(args, out, runs)
-        text = (out / f"{table}.md").read_text()
+        text = (out / f"{section}.md").read_text()
         assert "not run" not in text and "Kept from the previous table" in text, section
         assert all(label in text for label in labels) and "abc1234" in text, section

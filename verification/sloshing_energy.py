@@ -47,17 +47,25 @@ K2 = 2 * math.pi / LENGTH
 PERIOD = 2 * math.pi / math.sqrt(G * K2 * math.tanh(K2 * DEPTH))    # the second mode's, 0.647 s
 
 
-def run_case(rows: int, loose_band: float, t_end: float, runs: Path) -> dict:
-    """One run of the tank (``rows`` particle rows in the depth, the loose side's band
-    ``loose_band``, 0: off) to ``t_end`` (s), its frames in ``runs``; returns the row's measures."""
-    dx = DEPTH / rows
+def sloshing_scene(dx: float, loose_band: float, t_end: float, extra: list | tuple = (),
+                   output: Output | None = None) -> Scene:
+    """The tank at spacing ``dx`` (m), started with ``u = 0.2 cos(πx/L)`` m/s, with the
+    recommended set (the loose side's band ``loose_band``, 0: off) and the effects ``extra``
+    appended (``tests/test_sponge.py`` adds a sponge zone), run to ``t_end`` (s)."""
     fluid = FluidBody.block("water", (0.0, 0.0), (LENGTH, DEPTH), dx, [Phase("water", RHO)])
     c0 = 10 * math.sqrt(2 * G * DEPTH)
     fluid.density[:] = hydrostatic_density(np.full(fluid.n, RHO), DEPTH - fluid.positions[:, 1], G, c0)
     fluid.velocity[:, 0] = 0.2 * np.cos(math.pi * fluid.positions[:, 0] / LENGTH)
     walls = wall_box((0.0, 0.0), (LENGTH, 2 * DEPTH), dx, layers=3)
-    scene = Scene([fluid, walls], [water(c0, spacing=dx, loose_band=loose_band)], t_end=t_end,
-                  output=Output(every=0.05, gif=False, png=False))
+    scheme = water(c0, spacing=dx, loose_band=loose_band, extra=list(extra))
+    return Scene([fluid, walls], [scheme], t_end=t_end, **({"output": output} if output else {}))
+
+
+def run_case(rows: int, loose_band: float, t_end: float, runs: Path) -> dict:
+    """One run of the tank (``rows`` particle rows in the depth, the loose side's band
+    ``loose_band``, 0: off) to ``t_end`` (s), its frames in ``runs``; returns the row's measures."""
+    dx = DEPTH / rows
+    scene = sloshing_scene(dx, loose_band, t_end, output=Output(every=0.05, gif=False, png=False))
     out = runs / f"rows{rows}_loose{loose_band:g}"
     t0 = time.perf_counter()
     res = Simulation(scene).run(out, progress=False, overwrite=True)
