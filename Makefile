@@ -25,6 +25,7 @@ verify: $(STAMP)
 	$(PY) verification/fluid_validation.py --out verification/results/fluid_validation
 	$(PY) verification/fluid_core.py --section all --out verification/results/fluid_core
 	$(PY) verification/structure_validation.py --section all --out verification/results/structure
+	$(PY) verification/volume_attribution.py --out verification/results/volume_consistency
 	$(PY) verification/wave_absorption.py --out verification/results/wave_absorption
 	$(PY) verification/sloshing_energy.py --out verification/results/volume_consistency
 

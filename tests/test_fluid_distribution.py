@@ -13,7 +13,9 @@ from mlsgalerkin.fluid.distribution import (
     CLOSED_GAP,
     CLUMP_DISTANCE,
     PIXELS_PER_SPACING,
+    cell_volumes,
     geometric_volume,
+    occupancy,
     pair_statistics,
     pair_statistics_reference,
     volume_error,
@@ -213,3 +215,41 @@ def test_the_volume_error_compares_the_cells_with_the_masses_over_the_densities(
     assert vgeo == pytest.approx(0.08, rel=1e-12) and abs(err) < 1e-12
     assert volume_error(x, M, np.full(x.shape[0], 1100.0), DX)[1] == pytest.approx(0.1, rel=1e-12)  # too dense: voids
     assert volume_error(x[:0], M[:0], M[:0], DX) == (0.0, 0.0)
+
+
+@pytest.mark.parametrize("dim, upper", [(1, (0.37,)), (2, (0.4, 0.2)), (3, (0.12, 0.1, 0.08))])
+def test_each_particle_of_a_lattice_gets_its_own_cell(dim, upper):
+    x = lattice((0.0,) * dim, upper, DX) + 0.00037
+    shares = cell_volumes(x, DX)
+    assert shares.shape == (len(x),)
+    np.testing.assert_allclose(shares, DX**dim, rtol=1e-12)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_the_shares_add_up_to_the_geometric_volume(dim):
+    """On a jittered block the shares differ from particle to particle, and add up to the closed
+    union that :func:`geometric_volume` measures (its tiles count the same pixels)."""
+    rng = np.random.default_rng(5)
+    x = lattice((0.0,) * dim, (0.3, 0.2, 0.1)[:dim], DX)
+    x = x + rng.uniform(-0.3, 0.3, x.shape) * DX
+    shares = cell_volumes(x, DX)
+    grid, pixel = occupancy(x, DX)
+    assert shares.sum() == pytest.approx(float(grid.sum()) * pixel**dim, rel=1e-12)
+    assert shares.sum() == pytest.approx(geometric_volume(x, DX), rel=1e-12)
+    assert shares.std() > 0.05 * DX**dim
+
+
+def test_a_stretched_sheet_reads_its_closed_gaps():
+    """A row of particles 1.3 spacings apart: the closing fills the 0.3-spacing gaps between their
+    cells, and each inner particle gets its cell and half of each gap beside it, 1.3 Δx² on average; 1.8
+    spacings apart, the gaps stay open and each particle gets its own cell."""
+    for stretch, share in ((1.3, 1.3), (1.8, 1.0)):
+        x = np.c_[np.arange(20) * stretch * DX, np.zeros(20)] + 0.00037
+        inner = cell_volumes(x, DX)[2:-2] / DX**2
+        assert inner.mean() == pytest.approx(share, abs=0.02)
+        # a gap of 1.2 pixels holds one or two pixel columns, each a quarter of a cell
+        np.testing.assert_allclose(inner, share, atol=1.0 / PIXELS_PER_SPACING + 1e-9)
+
+
+def test_no_particles_no_shares():
+    assert cell_volumes(np.zeros((0, 2)), DX).shape == (0,)

@@ -59,6 +59,13 @@ pixel phase is taken from the lowest *populated* level of faces, so a few splash
 do not set it either. :func:`occupancy` (one grid, coarsened above :data:`MAX_PIXELS`) stays for
 pictures and tests.
 
+**Where a volume error sits.** :func:`cell_volumes` splits the closed union among the particles,
+each pixel to the nearest one, so each particle's share ``v_i`` against its ``M_i/ρ_i`` says where
+the fluid is looser or tighter than its densities (``verification/volume_attribution.py`` sorts
+them by their neighbours; ``docs/theory/stabilisation.md`` §10 has what it found in the splashing
+flows). A single share moves by a pixel column with the phase (a quarter of a cell at four pixels
+per spacing); sums over a neighbourhood or a class of particles do not.
+
 **Pair statistics.** From the neighbour table (CSR ``indptr``, ``indices``; every pair closer
 than the kernel's support is in it): the smallest fluid–fluid pair distance and the number of
 fluid–fluid pairs closer than :data:`CLUMP_DISTANCE` spacings (each pair counted once), and the
@@ -78,6 +85,7 @@ import numpy as np
 from numba import prange
 from numpy.typing import NDArray
 from scipy import ndimage
+from scipy.spatial import cKDTree
 
 from mlsgalerkin.pairs import pair_offset
 from mlsgalerkin.periodic import as_period
@@ -91,6 +99,7 @@ __all__ = [
     "SINGLE_GRID_PIXELS",
     "TILE_PIXELS",
     "PairStatistics",
+    "cell_volumes",
     "closing_radius",
     "geometric_volume",
     "grid_lower_corner",
@@ -192,11 +201,9 @@ def grid_lower_corner(x: NDArray[np.float64], spacing: float, pixel: float) -> N
     return corner
 
 
-def occupancy(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = PIXELS_PER_SPACING,
-              closed_gap: float = CLOSED_GAP) -> tuple[NDArray[np.uint8], float]:
-    """The closed union of the particles' cells on a pixel grid: ``(grid, pixel)`` with ``grid``
-    ``uint8`` of shape ``(m0, m1, m2)`` (1 inside; ``m2 = 1`` in 2D, ``m1 = m2 = 1`` in 1D) and the
-    pixel side ``pixel`` (m). ``x (n, d)`` positions (m), ``spacing`` the cell side Δx (m)."""
+def _closed_grid(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int,
+                 closed_gap: float) -> tuple[NDArray[np.uint8], float, NDArray[np.float64]]:
+    """:func:`occupancy`'s grid, pixel side (m) and the grid's lower corner ``(3,)`` (m)."""
     x = np.ascontiguousarray(x, dtype=np.float64)
     n, dim = x.shape
     k = int(pixels_per_spacing)
@@ -218,8 +225,37 @@ def occupancy(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = 
     grid = np.zeros(tuple(full), dtype=np.uint8)
     _rasterise(x, origin, pixel, 0.5 * spacing, full, grid)
     size = tuple(2 * r + 1 if a < dim else 1 for a in range(3))
-    grid = _close(grid, size)
+    return _close(grid, size), pixel, origin
+
+
+def occupancy(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = PIXELS_PER_SPACING,
+              closed_gap: float = CLOSED_GAP) -> tuple[NDArray[np.uint8], float]:
+    """The closed union of the particles' cells on a pixel grid: ``(grid, pixel)`` with ``grid``
+    ``uint8`` of shape ``(m0, m1, m2)`` (1 inside; ``m2 = 1`` in 2D, ``m1 = m2 = 1`` in 1D) and the
+    pixel side ``pixel`` (m). ``x (n, d)`` positions (m), ``spacing`` the cell side Δx (m)."""
+    grid, pixel, _ = _closed_grid(x, spacing, pixels_per_spacing, closed_gap)
     return grid, pixel
+
+
+def cell_volumes(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = PIXELS_PER_SPACING,
+                 closed_gap: float = CLOSED_GAP) -> NDArray[np.float64]:
+    r"""Each particle's share ``(n,)`` (m^d) of the geometric volume: every pixel of
+    :func:`occupancy`'s closed union goes to the particle nearest its centre (a Voronoi split of
+    the union on the pixel grid), so the shares add up to the union's measure, and
+    ``v_i / (M_i/ρ_i) − 1`` says *where* a volume error sits. A particle deep in a lattice gets its
+    cell, :math:`\Delta x^d`, exactly; one whose neighbours have moved apart gets the closed gaps
+    beside it (a particle of a stretched surface: more than its cell); one that shares its cell
+    with a close neighbour, less. ``x (n, d)`` positions (m), ``spacing`` Δx (m). One grid over the
+    bounding box (coarsened as :func:`occupancy`'s): a diagnostic of frames, not of every step."""
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    n, dim = x.shape
+    if n == 0:
+        return np.zeros(0)
+    grid, pixel, origin = _closed_grid(x, spacing, pixels_per_spacing, closed_gap)
+    inside = np.nonzero(grid.reshape(grid.shape[:dim]))
+    centres = np.stack([origin[a] + (inside[a] + 0.5) * pixel for a in range(dim)], axis=1)
+    _, owner = cKDTree(x).query(centres)
+    return np.bincount(owner, minlength=n) * pixel**dim
 
 
 def occupancy_reference(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = PIXELS_PER_SPACING,
