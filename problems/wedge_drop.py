@@ -27,16 +27,15 @@ Monaghan viscosity, δ-SPH density diffusion, particle shifting and the tension 
 the cavitation floor held the water to the wedge, and the velocity at 25 ms was 5–7 % low at
 every resolution (measured at 20 and 10 mm; 2.9 % at 5 mm with the release).
 
-Measured at the one recommended set (``verification/results/structure/wedge.md``, regenerated
-2026-12-03 at commit a2a2d2d; the pressure's linear fit integrated exactly): at 10, 5 and 2.5 mm
-the velocity is within 5.08, 3.22 and 3.54 % (1.88, 0.78 and 0.83 % of the force-consistent
-velocity), the peak force +20.4, +10.6 and **+56.5 %** at −0.7, −0.1 and −2.2 ms, the force's RMS
-error 414, 554 and 498 N. Rerun 2026-12-04 at 10 and 5 mm with the volume consistency's loose
-side and droplets in the set (commit f9f85f6): velocity within 4.86 and 3.21 %, peak force +21.6
-and +11.4 % (the 5 mm peak now at +1.0 ms), RMS error 410 and 574 N; the 2.5 mm row is the
-earlier run's. The 2.5 mm peak is two time-series samples (6035 N at 12.50 ms and
-8061 N at 12.76 ms, the samples around them 4956–5178 N), taken as a particle leaves the spray
-root at 57 m/s; the rest of that record peaks at 5308 N (+3.1 %). Not taken apart yet. (The previous table, before the linear
+Measured at the one recommended set (``verification/results/structure/wedge.md``, every row
+rerun at the current set: 10 and 5 mm on 2026-12-04 at commit f9f85f6, 2.5 mm on 2026-12-04 at
+commit 6eca64d, one thread a run, 2 882 s for the 2.5 mm run): at 10, 5 and 2.5 mm the velocity
+is within 4.86, 3.21 and 3.31 % (1.72, 1.02 and 0.55 % of the force-consistent velocity), the
+peak force **+21.6, +11.4 and +3.7 %** at −0.7, +1.0 and +0.6 ms, the force's RMS error 410, 574
+and 334 N: the force converges on the measurement. (The 2.5 mm row of 2026-12-03, at commit
+a2a2d2d, read +56.5 %: two time-series samples, 6035 and 8061 N, taken as a particle left the
+spray root at 57 m/s, with the rest of its record at +3.1 %. The run at the current set has no
+such spike.) (The previous table, before the linear
 consistency's surface fix: +21.6, +14.1 and +5.8 %, velocity 4.40, 3.99 and 3.20 %.) Direct
 nodal integration read 5.06, 2.94 and 3.26 %; +18.2, +9.4 and +5.8 %. The velocity misses the
 3 % against the measured curve at every resolution, inside the 3.6 % by which the two measured
