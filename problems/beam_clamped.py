@@ -34,12 +34,29 @@ collapsing water opens in the bulk at the density its continuity gives it). It i
 and 4.69 % on average (``docs/theory/stabilisation.md`` §10). ``--set loose_band=0`` leaves the
 loose side out, ``--set droplet_rate=0`` the droplets. How much of the +2.27 % the measure's
 threshold carries: the same frames on 32 pixels per spacing with a sharp half-spacing
-threshold read 0.3–1.7 % less (:mod:`mlsgalerkin.fluid.distribution`); with each closed pixel
-given to its nearest particle (frames 1.15–1.45 s), the excess sits in the 14–16 % of the
-particles that have three or four neighbours within 1.5 spacings (the torn, ragged surface and
-its sheets), whose cells cover 6–12 % more than their densities say, while the bulk reads
-1–2 % tighter. At ``--dx 0.0025`` (one thread, 2 095 s on a shared machine, 92 109 steps,
-2026-12-04) the volume reads up to +1.46 %, the tip period 0.5942 s (−0.5 %), no particle
+threshold read 0.3–1.7 % less (:mod:`mlsgalerkin.fluid.distribution`).
+
+**Where the volume error sits, at three spacings** (``verification/volume_attribution.py``: each
+particle's share of the geometric volume against its ``M/ρ``, frames every 0.05 s after the first
+load; rerun 2026-12-04 at commit 6eca64d, the 4 mm run bit for bit as the table's):
+
+At 4, 2.5 and 2 mm: largest volume error (time series) +2.27, +1.46 and +1.43 %; mean over the
+frames +0.73, +0.71 and +0.70 %; over the last second (settled) +0.55, +0.54 and +0.52 %. The
+particles with 1–4 neighbours within 1.5 spacings are 17.3, 11.6 and 10.1 % of the water, each
+8.1, 8.6 and 9.6 % looser than its ``M/ρ``, and contribute +1.39, +1.00 and +0.98 %; the rest
+contribute −0.73, −0.33 and −0.33 %.
+
+The excess sits in the ragged free surface, in the linings of the voids (the model has no air) the breaking
+run-up traps against the left wall (they form and close within a few frames), and in the
+collapsing run-up against the beam (at 4 mm, 1.2–1.4 s: about 170 particles 1.06 spacings from
+their nearest neighbour, against 0.92 in the rest, at 100–170 Pa); the rest of the water is
+slightly tighter. The settled water sits at the loose side's band (0.5 %): the loose side relaxes
+the error to it and no further. The excursions above 1 % during the splash (at 2 mm: 47 % of the
+samples from 0.8 to 1.5 s, 9 % from 1.5 to 2.5 s, none after) fall from 4 to 2.5 mm and hardly
+from 2.5 to 2 mm, so a finer spacing alone does not bring this flow within 1 %.
+At ``--dx 0.0025`` (one thread, 2 095 s on a shared machine, 92 109 steps,
+2026-12-04) the tip period reads 0.5942 s (−0.5 %), at ``--dx 0.002`` (3 738 s on a shared
+machine, 115 988 steps) 0.5949 s (−0.4 %); no particle
 behind a wall. ``--set void_memory=0.2`` (the floor remembers part of the expansion) gave 3.0 %
 before the volume consistency joined the set (period 0.5858 s, −1.9 %); it raises the pressure
 noise of the dam break with impact.
