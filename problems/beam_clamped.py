@@ -44,7 +44,7 @@ At 4, 2.5 and 2 mm: largest volume error (time series) +2.27, +1.46 and +1.43 %;
 frames +0.73, +0.71 and +0.70 %; over the last second (settled) +0.55, +0.54 and +0.52 %. The
 particles with 1–4 neighbours within 1.5 spacings are 17.3, 11.6 and 10.1 % of the water, each
 8.1, 8.6 and 9.6 % looser than its ``M/ρ``, and contribute +1.39, +1.00 and +0.98 %; the rest
-contribute −0.73, −0.33 and −0.33 %.
+contribute −0.74, −0.34 and −0.33 %.
 
 The excess sits in the ragged free surface, in the linings of the voids (the model has no air) the breaking
 run-up traps against the left wall (they form and close within a few frames), and in the
