@@ -84,7 +84,7 @@ def local_excess(x: np.ndarray, shares: np.ndarray, volume: np.ndarray, spacing:
     return excess / (volume + np.bincount(i, weights=volume[j], minlength=n))
 
 
-def run_attribution(run: Path, after: float) -> tuple[dict, tuple[np.ndarray, np.ndarray] | None]:
+def run_attribution(run: Path, after: float) -> tuple[dict, tuple[np.ndarray, np.ndarray, float] | None]:
     """Mean and largest over the frames after ``after`` (s) of :func:`frame_attribution`, the mean
     error and the loose class's contribution over the last :data:`SETTLED` seconds (the water at
     rest again), and the positions and :func:`local_excess` of the frame of the largest error."""
@@ -99,6 +99,8 @@ def run_attribution(run: Path, after: float) -> tuple[dict, tuple[np.ndarray, np
         times.append(t)
         points, data = read_vtu(path)
         fluid = np.asarray(data["is_wall"]) == 0
+        if "outside" in data:                       # particles taken out of the run, as the run's own measure
+            fluid &= np.asarray(data["outside"]) == 0
         x = np.ascontiguousarray(points[fluid, :2])
         volume = mass[fluid] / np.asarray(data["density"])[fluid]
         row = frame_attribution(x, volume, spacing)
