@@ -41,7 +41,7 @@ particle's share of the geometric volume against its ``M/ρ``, frames every 0.05
 load; rerun 2026-12-04 at commit 6eca64d, the 4 mm run bit for bit as the table's):
 
 At 4, 2.5 and 2 mm: largest volume error (time series) +2.27, +1.46 and +1.43 %; mean over the
-frames +0.73, +0.71 and +0.70 %; over the last second (settled) +0.55, +0.54 and +0.52 %. The
+frames +0.73, +0.72 and +0.70 %; over the last second (settled) +0.55, +0.54 and +0.52 %. The
 particles with 1–4 neighbours within 1.5 spacings are 17.3, 11.6 and 10.1 % of the water, each
 8.1, 8.6 and 9.6 % looser than its ``M/ρ``, and contribute +1.39, +1.00 and +0.98 %; the rest
 contribute −0.74, −0.34 and −0.33 %.
