@@ -57,10 +57,13 @@ REACH = 1.5
 SETTLED = 1.0
 
 
-def frame_attribution(x: np.ndarray, volume: np.ndarray, spacing: float) -> dict[str, float]:
+def frame_attribution(x: np.ndarray, volume: np.ndarray, spacing: float,
+                      shares: np.ndarray | None = None) -> dict[str, float]:
     """The volume error of one frame and each class's share of the particles and contribution to
-    it (fractions). ``x (n, d)`` fluid positions (m), ``volume (n,)`` their ``M/ρ`` (m^d)."""
-    shares = cell_volumes(x, spacing)
+    it (fractions). ``x (n, d)`` fluid positions (m), ``volume (n,)`` their ``M/ρ`` (m^d),
+    ``shares (n,)`` their :func:`cell_volumes` (m^d; computed when not given)."""
+    if shares is None:
+        shares = cell_volumes(x, spacing)
     neighbours = cKDTree(x).query_ball_point(x, REACH * spacing, return_length=True) - 1
     total = float(volume.sum())
     row = {"volume_error": float(shares.sum()) / total - 1.0}
@@ -103,11 +106,12 @@ def run_attribution(run: Path, after: float) -> tuple[dict, tuple[np.ndarray, np
             fluid &= np.asarray(data["outside"]) == 0
         x = np.ascontiguousarray(points[fluid, :2])
         volume = mass[fluid] / np.asarray(data["density"])[fluid]
-        row = frame_attribution(x, volume, spacing)
+        shares = cell_volumes(x, spacing)
+        row = frame_attribution(x, volume, spacing, shares)
         rows.append(row)
         if row["volume_error"] > worst_error:
             worst_error = row["volume_error"]
-            worst = (x, local_excess(x, cell_volumes(x, spacing), volume, spacing), t)
+            worst = (x, local_excess(x, shares, volume, spacing), t)
     keys = rows[0].keys()
     series = np.genfromtxt(run / "timeseries.csv", delimiter=",", names=True)
     out = {"spacing_mm": 1e3 * spacing, "frames": len(rows), "after_s": after,
