@@ -131,6 +131,7 @@ class Parameters:
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     volume_consistency: float = RECOMMENDED.volume_consistency  #: the density relaxed towards the particles' packing at rate ε where the fluid has a free surface (0: off) (–)
     loose_band: float = RECOMMENDED.loose_band  #: the volume consistency's loose side: past this volume error the density outside the deep bulk relaxes (0: off; off with the volume consistency) (–)
+    loose_local: float = RECOMMENDED.loose_local  #: the loose side's local part: weight of each loose particle's neighbourhood excess, away from the walls (0: off) (–)
     droplet_rate: float = RECOMMENDED.droplet_rate  #: droplets (fewer neighbours than a line) relax to the rest density at this rate, in c0/h (0: off; off with the volume consistency) (–)
     c0_factor: float = 10.0       #: sound speed / 2 sqrt(gH) (–)
     g: float = 9.81               #: gravitational acceleration (m/s²)
@@ -176,7 +177,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                    linear_consistency=p.linear_consistency,
                    volume_consistency=p.volume_consistency,
                    loose_band=p.loose_band if p.volume_consistency else 0.0, droplet_rate=p.droplet_rate,
-                   spacing=p.dx)
+                   loose_local=p.loose_local, spacing=p.dx)
 
     def tip_x(state) -> float:
         m = state.body("beam")
@@ -264,7 +265,7 @@ def check(p: Parameters) -> list[str]:
     out = require_positive(p, "column_width", "column_height", "beam_x", "beam_height", "thickness", "young",
                            "rho_beam", "elements", "tank_length", "dx", "t_end", "rho", "c0_factor", "g",
                            "probe_every", "frame_every")
-    out += require_nonnegative(p, "alpha", "delta", "wall_acceleration", "void_memory", "loose_band", "droplet_rate")
+    out += require_nonnegative(p, "alpha", "delta", "wall_acceleration", "void_memory", "loose_band", "loose_local", "droplet_rate")
     out += require(p.void_memory == 0 or p.negative_pressure == "cavitate",
                    f"void_memory acts with negative_pressure=cavitate only, got {p.negative_pressure!r}")
     out += require(p.wall_acceleration <= 1.0, f"wall_acceleration is a share in [0, 1], got {p.wall_acceleration!r}")

@@ -119,6 +119,7 @@ class Parameters:
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
     volume_consistency: float = RECOMMENDED.volume_consistency  #: the density relaxed towards the particles' packing at rate ε where the fluid has a free surface (0: off) (–)
     loose_band: float = RECOMMENDED.loose_band  #: the volume consistency's loose side: past this volume error the density outside the deep bulk relaxes (0: off; off with the volume consistency) (–)
+    loose_local: float = RECOMMENDED.loose_local  #: the loose side's local part: weight of each loose particle's neighbourhood excess, away from the walls (0: off) (–)
     droplet_rate: float = RECOMMENDED.droplet_rate  #: droplets (fewer neighbours than a line) relax to the rest density at this rate, in c0/h (0: off; off with the volume consistency) (–)
     c0_factor: float = 10.0       #: sound speed / 2 sqrt(gH) (–)
     g: float = 9.81               #: gravitational acceleration (m/s²)
@@ -166,7 +167,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                    linear_consistency=p.linear_consistency,
                    volume_consistency=p.volume_consistency,
                    loose_band=p.loose_band if p.volume_consistency else 0.0, droplet_rate=p.droplet_rate,
-                   spacing=p.dx)
+                   loose_local=p.loose_local, spacing=p.dx)
     approximation = scheme.approximation
     hinge = np.array([p.tank_length, 0.0])
     local = sensor_points((p.tank_length, 0.0), SENSOR_HEIGHT - 0.5 * SENSOR_SIZE, SENSOR_HEIGHT + 0.5 * SENSOR_SIZE,
@@ -379,7 +380,7 @@ def check(p: Parameters) -> list[str]:
     """Problems with the parameters (see ``mlsgalerkin.problem``)."""
     out = require_positive(p, "height", "tank_length", "beam_length", "beam_mass", "thickness", "stiffness", "dx",
                            "t_end", "rho", "c0_factor", "g", "probe_every", "frame_every")
-    out += require_nonnegative(p, "alpha", "delta", "wall_acceleration", "loose_band", "droplet_rate")
+    out += require_nonnegative(p, "alpha", "delta", "wall_acceleration", "loose_band", "loose_local", "droplet_rate")
     out += require(p.wall_acceleration <= 1.0, f"wall_acceleration is a share in [0, 1], got {p.wall_acceleration!r}")
     out += require(p.support in SUPPORTS, f"support must be one of {SUPPORTS}, got {p.support!r}")
     out += require(p.shifting in SHIFTING_MODES, f"shifting must be one of {SHIFTING_MODES}, got {p.shifting!r}")

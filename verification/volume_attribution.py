@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
 
-from mlsgalerkin.fluid.distribution import cell_volumes
+from mlsgalerkin.fluid.distribution import cell_volumes, neighbourhood_excess
 from mlsgalerkin.io import atomic_write, csv_text, format_cell, provenance, read_pvd, read_vtu
 from mlsgalerkin.io.checkpoint import latest_checkpoint, load_checkpoint
 
@@ -76,21 +76,10 @@ def frame_attribution(x: np.ndarray, volume: np.ndarray, spacing: float,
     return row
 
 
-def local_excess(x: np.ndarray, shares: np.ndarray, volume: np.ndarray, spacing: float) -> np.ndarray:
-    """``Σ_j (v_j − V_j) / Σ_j V_j`` over each particle and its neighbours within :data:`REACH`
-    spacings ``(n,)``: a particle's own share moves by a pixel column (a quarter of a cell at four
-    pixels per spacing) with its phase, its neighbourhood's much less."""
-    pairs = cKDTree(x).query_pairs(REACH * spacing, output_type="ndarray")
-    i, j = np.concatenate([pairs[:, 0], pairs[:, 1]]), np.concatenate([pairs[:, 1], pairs[:, 0]])
-    n = x.shape[0]
-    excess = shares - volume + np.bincount(i, weights=(shares - volume)[j], minlength=n)
-    return excess / (volume + np.bincount(i, weights=volume[j], minlength=n))
-
-
 def run_attribution(run: Path, after: float) -> tuple[dict, tuple[np.ndarray, np.ndarray, float] | None]:
     """Mean and largest over the frames after ``after`` (s) of :func:`frame_attribution`, the mean
     error and the loose class's contribution over the last :data:`SETTLED` seconds (the water at
-    rest again), and the positions and :func:`local_excess` of the frame of the largest error."""
+    rest again), and the positions and :func:`~mlsgalerkin.fluid.distribution.neighbourhood_excess` of the frame of the largest error."""
     summary = json.loads((run / "summary.json").read_text())
     spacing = float(summary["parameters"]["dx"])
     arrays, _ = load_checkpoint(latest_checkpoint(run / "checkpoints"))
@@ -111,7 +100,7 @@ def run_attribution(run: Path, after: float) -> tuple[dict, tuple[np.ndarray, np
         rows.append(row)
         if row["volume_error"] > worst_error:
             worst_error = row["volume_error"]
-            worst = (x, local_excess(x, shares, volume, spacing), t)
+            worst = (x, neighbourhood_excess(x, shares, volume, spacing, REACH), t)
     keys = rows[0].keys()
     series = np.genfromtxt(run / "timeseries.csv", delimiter=",", names=True)
     out = {"spacing_mm": 1e3 * spacing, "frames": len(rows), "after_s": after,

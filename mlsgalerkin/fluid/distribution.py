@@ -64,7 +64,11 @@ each pixel to the nearest one, so each particle's share ``v_i`` against its ``M_
 the fluid is looser or tighter than its densities (``verification/volume_attribution.py`` sorts
 them by their neighbours; ``docs/theory/stabilisation.md`` §10 has what it found in the splashing
 flows). A single share moves by a pixel column with the phase (a quarter of a cell at four pixels
-per spacing); sums over a neighbourhood or a class of particles do not.
+per spacing); sums over a neighbourhood or a class of particles do not:
+:func:`neighbourhood_excess` gives each particle the relative excess of its neighbourhood,
+``Σ_j (v_j − V_j) / Σ_j V_j`` over itself and the particles within
+:data:`NEIGHBOURHOOD_REACH` spacings (the volume consistency's loose side drives its local part
+with it).
 
 **Pair statistics.** From the neighbour table (CSR ``indptr``, ``indices``; every pair closer
 than the kernel's support is in it): the smallest fluid–fluid pair distance and the number of
@@ -94,6 +98,7 @@ __all__ = [
     "CLOSED_GAP",
     "CLUMP_DISTANCE",
     "MAX_PIXELS",
+    "NEIGHBOURHOOD_REACH",
     "PIXELS_PER_SPACING",
     "SINGLE_GRID_FILL",
     "SINGLE_GRID_PIXELS",
@@ -103,6 +108,7 @@ __all__ = [
     "closing_radius",
     "geometric_volume",
     "grid_lower_corner",
+    "neighbourhood_excess",
     "occupancy",
     "occupancy_reference",
     "pair_statistics",
@@ -127,6 +133,8 @@ TILE_PIXELS = {1: 1 << 16, 2: 256, 3: 64}
 SINGLE_GRID_FILL = 8
 #: A bounding box of up to this many pixels is always one grid.
 SINGLE_GRID_PIXELS = 1 << 16
+#: The neighbourhood of :func:`neighbourhood_excess`: the particles within this many spacings.
+NEIGHBOURHOOD_REACH = 1.5
 #: Fluid pairs closer than this many spacings are *clumped*.
 CLUMP_DISTANCE = 0.5
 
@@ -256,6 +264,30 @@ def cell_volumes(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int
     centres = np.stack([origin[a] + (inside[a] + 0.5) * pixel for a in range(dim)], axis=1)
     _, owner = cKDTree(x).query(centres)
     return np.bincount(owner, minlength=n) * pixel**dim
+
+
+def neighbourhood_excess(x: NDArray[np.float64], shares: NDArray[np.float64], volume: NDArray[np.float64],
+                         spacing: float, reach: float = NEIGHBOURHOOD_REACH) -> NDArray[np.float64]:
+    r"""The relative volume excess ``(n,)`` (–) of each particle's neighbourhood,
+
+    .. math:: e_i = \frac{\sum_{j \in N_i} (v_j - V_j)}{\sum_{j \in N_i} V_j},
+
+    over the particle itself and those within ``reach`` spacings ``N_i``, with ``v (n,)`` the
+    shares of :func:`cell_volumes` and ``V (n,)`` the volumes ``M/ρ`` (m^d each); ``x (n, d)``
+    positions (m), ``spacing`` Δx (m). Positive: the neighbourhood stands looser than its volumes
+    say. A single share moves by a pixel column with the grid's phase (a quarter of a cell at four
+    pixels per spacing); a neighbourhood's sum much less. The pairs come from one
+    :class:`scipy.spatial.cKDTree` query."""
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    n = x.shape[0]
+    own = np.asarray(shares, dtype=np.float64) - np.asarray(volume, dtype=np.float64)
+    if n == 0:
+        return np.zeros(0)
+    pairs = cKDTree(x).query_pairs(reach * spacing, output_type="ndarray")
+    i = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    j = np.concatenate([pairs[:, 1], pairs[:, 0]])
+    excess = own + np.bincount(i, weights=own[j], minlength=n)
+    return excess / (volume + np.bincount(i, weights=np.asarray(volume, dtype=np.float64)[j], minlength=n))
 
 
 def occupancy_reference(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = PIXELS_PER_SPACING,

@@ -55,7 +55,7 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
           consistent_integration: bool = RECOMMENDED.consistent_integration,
           linear_consistency: bool = RECOMMENDED.linear_consistency,
           volume_consistency: float = RECOMMENDED.volume_consistency, loose_band: float | None = None,
-          droplet_rate: float = RECOMMENDED.droplet_rate,
+          droplet_rate: float = RECOMMENDED.droplet_rate, loose_local: float = RECOMMENDED.loose_local,
           spacing: float | None = None,
           h_factor: float = 1.3,
           approximation: Approximation | None = None, extra: Sequence[Effect] = (), **options: Any) -> FluidScheme:
@@ -73,8 +73,9 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     unless ``volume_consistency`` is 0 (the density relaxed towards the particles' packing where the
     fluid has a free surface, ``docs/theory/stabilisation.md`` §10), with its loose side past the
     volume error ``loose_band`` (``None``, the default: :data:`RECOMMENDED`'s 0.005 when the volume
-    consistency is on; 0: off) and its droplets relaxed down to their rest density at
-    ``droplet_rate`` ``c0/h``;
+    consistency is on; 0: off), its local part of weight ``loose_local`` (each loose particle away
+    from the walls relaxes by that many times its neighbourhood's volume excess on top; 0: off) and
+    its droplets relaxed down to their rest density at ``droplet_rate`` ``c0/h``;
     then ``extra``. The stabilisation defaults are :data:`RECOMMENDED`.
 
     Parameters
@@ -117,7 +118,8 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     if linear_consistency:
         effects.append(LinearConsistentPressure())
     if volume_consistency != 0:     # a negative rate is listed, so the effect's check refuses it
-        effects.append(VolumeConsistency(volume_consistency, loose_band=loose_band, droplet_rate=droplet_rate))
+        effects.append(VolumeConsistency(volume_consistency, loose_band=loose_band, droplet_rate=droplet_rate,
+                                         loose_local=loose_local))
     effects += list(extra)
     approximation = approximation if approximation is not None else Approximation(h_factor=h_factor)
     options.setdefault("stabilisation", "as_listed")  # the list above is explicit: nothing is added to it

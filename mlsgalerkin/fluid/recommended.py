@@ -51,7 +51,9 @@ class StabilisationSet:
     free surface (–; 0: off; :class:`~mlsgalerkin.fluid.volume_consistency.VolumeConsistency`),
     ``loose_band`` its loose side: past this volume error of the whole fluid (geometric volume over
     ``Σ M/ρ``, minus one) the density of the particles that are neither deep nor splashes relaxes
-    too (–; 0: off), ``droplet_rate`` the rate ``r_d`` at which a droplet (a particle with fewer
+    too (–; 0: off), ``loose_local`` the weight ``w`` of the loose side's local part: each loose
+    particle away from the walls relaxes by ``w`` times its neighbourhood's volume excess past
+    ``0.05`` on top (–; 0: off), ``droplet_rate`` the rate ``r_d`` at which a droplet (a particle with fewer
     neighbours than a line of particles) relaxes down to its rest density, in units of ``c0/h``
     (–; 0: off).
     """
@@ -64,6 +66,7 @@ class StabilisationSet:
     linear_consistency: bool = True
     volume_consistency: float = 0.02
     loose_band: float = 0.005
+    loose_local: float = 2.0
     droplet_rate: float = 0.1
 
     def as_dict(self) -> dict[str, Any]:
@@ -79,11 +82,11 @@ RECOMMENDED = StabilisationSet()
 def recommended_stabilisation() -> list[Effect]:
     """The stabilising effects of :data:`RECOMMENDED`, in the order :func:`water` lists them:
     ``MonaghanViscosity(α)``, ``DensityDiffusion(δ)``, ``ParticleShifting("local")``,
-    ``LinearConsistentPressure()``, ``VolumeConsistency(ε, loose_band=e_0, droplet_rate=r_d)``."""
+    ``LinearConsistentPressure()``, ``VolumeConsistency(ε, loose_band=e_0, droplet_rate=r_d, loose_local=w)``."""
     return [MonaghanViscosity(RECOMMENDED.alpha), DensityDiffusion(RECOMMENDED.delta),
             ParticleShifting(RECOMMENDED.shifting), LinearConsistentPressure(),
             VolumeConsistency(RECOMMENDED.volume_consistency, loose_band=RECOMMENDED.loose_band,
-                              droplet_rate=RECOMMENDED.droplet_rate)]
+                              droplet_rate=RECOMMENDED.droplet_rate, loose_local=RECOMMENDED.loose_local)]
 
 
 def is_stabilising(effect: object) -> bool:

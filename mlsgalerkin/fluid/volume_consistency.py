@@ -136,7 +136,7 @@ from numpy.typing import NDArray
 
 from mlsgalerkin.approximation.table import ShapeTable
 from mlsgalerkin.fluid.closed_volume import ClosedVolume
-from mlsgalerkin.fluid.distribution import volume_error
+from mlsgalerkin.fluid.distribution import cell_volumes, neighbourhood_excess, volume_error
 from mlsgalerkin.fluid.domain_exit import still_in_run
 from mlsgalerkin.fluid.effect import Effect, EffectContext, check_positive
 from mlsgalerkin.fluid.state import FluidState
@@ -145,6 +145,7 @@ from mlsgalerkin.neighbors import find_neighbors
 from mlsgalerkin.periodic import minimum_image
 
 __all__ = [
+    "LOOSE_LOCAL_FIELD",
     "VolumeConsistency",
     "deep_particles",
     "deep_particles_reference",
@@ -153,7 +154,13 @@ __all__ = [
     "lattice_shepard_sum",
     "loose_particles",
     "volume_consistency_rate",
+    "wall_rows",
+    "wall_rows_reference",
 ]
+
+#: ``state.extra`` key of the loose side's last neighbourhood excess per particle (``(n,)``, –; 0
+#: on the wall rows and while the loose side is idle), in the frames and checkpoints.
+LOOSE_LOCAL_FIELD = "loose_local_excess"
 
 FloatArray = NDArray[np.float64]
 
@@ -222,6 +229,33 @@ def deep_particles_reference(table: ShapeTable, shepard_sum: FloatArray, n_fluid
     return ~shallow[:n_fluid] & ((pattern @ shallow.astype(float)) == 0.0)
 
 
+@numba.njit(parallel=True, cache=True)
+def _wall_rows(indptr, indices, n_fluid, out):
+    for i in prange(n_fluid):
+        touches = False
+        for q in range(indptr[i], indptr[i + 1]):
+            if indices[q] >= n_fluid:
+                touches = True
+        out[i] = touches
+
+
+def wall_rows(table: ShapeTable, n_fluid: int) -> NDArray[np.bool_]:
+    """The mask ``(n_fluid,)`` of the fluid particles whose table row lists a wall node
+    (``j >= n_fluid``): those within a support of a wall, a structure's surface included."""
+    out = np.empty(n_fluid, dtype=np.bool_)
+    _wall_rows(table.indptr, table.indices, n_fluid, out)
+    return out
+
+
+def wall_rows_reference(table: ShapeTable, n_fluid: int) -> NDArray[np.bool_]:
+    """Numpy version of :func:`wall_rows` (tests)."""
+    rows = np.repeat(np.arange(table.indptr.size - 1), np.diff(table.indptr))
+    hit = (rows < n_fluid) & (np.asarray(table.indices) >= n_fluid)
+    out = np.zeros(n_fluid, dtype=bool)
+    out[rows[hit]] = True
+    return out
+
+
 def volume_consistency_rate(shepard_sum: FloatArray, rho: FloatArray, h: FloatArray, deep: NDArray[np.bool_], *,
                             reference: float, rate: float, c0: float, band: float = 0.0,
                             bias: float = 0.0) -> tuple[FloatArray | None, float]:
@@ -288,9 +322,11 @@ class VolumeConsistency(Effect):
 
     def __init__(self, rate: float = 0.02, *, band: float = 0.005, surface: float = 0.9,
                  loose_band: float = 0.005, loose_every: int = 10, splash: float = 0.5,
-                 droplet_rate: float = 0.1) -> None:
+                 droplet_rate: float = 0.1, loose_local: float = 2.0, loose_local_band: float = 0.05) -> None:
         self.rate, self.band, self.surface = float(rate), float(band), float(surface)
         self.loose_band, self.loose_every, self.splash = float(loose_band), loose_every, float(splash)
+        self.loose_local, self.loose_local_band = float(loose_local), float(loose_local_band)
+        self.loose_local_largest = 0.0   # the largest neighbourhood excess the local part measured (–)
         self.droplet_rate = float(droplet_rate)
         self.droplet_evaluations = 0     # evaluations in which some droplet was relaxed
         self.droplets_largest = 0        # the most droplets relaxed in one evaluation
@@ -310,6 +346,8 @@ class VolumeConsistency(Effect):
 
     def __repr__(self) -> str:
         loose = f", loose_band={self.loose_band:g}" if self.loose_band else ""
+        if self.loose_band and self.loose_local:
+            loose += f", loose_local={self.loose_local:g}, loose_local_band={self.loose_local_band:g}"
         droplet = f", droplet_rate={self.droplet_rate:g}" if self.droplet_rate else ""
         return f"VolumeConsistency({self.rate:g}, band={self.band:g}, surface={self.surface:g}{loose}{droplet})"
 
@@ -327,6 +365,12 @@ class VolumeConsistency(Effect):
         if not (np.isfinite(self.loose_band) and 0.0 <= self.loose_band < 0.1):
             out.append(f"VolumeConsistency: loose_band must be a volume error in [0, 0.1) (0: off), got "
                        f"{self.loose_band:g}; 0.005 is the measured choice")
+        if not (np.isfinite(self.loose_local) and 0.0 <= self.loose_local <= 10.0):
+            out.append(f"VolumeConsistency: loose_local must be a weight in [0, 10] (0: off), got "
+                       f"{self.loose_local:g}; 2 is the measured choice")
+        if not (np.isfinite(self.loose_local_band) and 0.0 <= self.loose_local_band < 1.0):
+            out.append(f"VolumeConsistency: loose_local_band must be a neighbourhood excess in [0, 1), got "
+                       f"{self.loose_local_band:g}; 0.05 is the measured choice")
         if not (isinstance(self.loose_every, int) and self.loose_every >= 1):
             out.append(f"VolumeConsistency: loose_every must be a whole number of evaluations >= 1, got "
                        f"{self.loose_every!r}")
@@ -347,6 +391,10 @@ class VolumeConsistency(Effect):
         self.c0 = state.c0
         self._h = float(state.h[state.fluid].max()) if state.n_fluid else math.nan
         self.idle = any(isinstance(e, ClosedVolume) for e in ctx.effects)
+        if self.loose_band > 0.0 and self.loose_local > 0.0:
+            field = state.extra.get(LOOSE_LOCAL_FIELD)
+            if field is None or np.shape(field) != (state.n,):
+                state.extra[LOOSE_LOCAL_FIELD] = np.zeros(state.n)
 
     def continuity(self, s: FluidState) -> None:
         if self.idle:
@@ -392,15 +440,40 @@ class VolumeConsistency(Effect):
         evaluations with a free surface (the first included), and past ``loose_band`` the density
         of the particles of :func:`loose_particles` relaxed down."""
         nf = s.n_fluid
+        local = self.loose_local > 0.0
         if (self.surface_evaluations - 1) % self.loose_every == 0:
-            _, self.loose_error = volume_error(s.x[:nf], s.M[:nf], s.rho[:nf], s.spacing, still_in_run(s))
+            in_run = still_in_run(s)
+            _, self.loose_error = volume_error(s.x[:nf], s.M[:nf], s.rho[:nf], s.spacing, in_run)
             self.loose_error_largest = max(self.loose_error_largest, self.loose_error)
+            if local:
+                self._measure_local(s, in_run)
         excess = self.loose_error - self.loose_band
         if excess <= 0.0:
             return
         loose = loose_particles(s.table.kernel_sum[:nf], deep, reference=self.reference, splash=self.splash)
-        s.drho[:nf][loose] -= self.rate * self.c0 / s.h[:nf][loose] * s.rho[:nf][loose] * excess
+        if local:
+            drive = excess + self.loose_local * np.maximum(s.extra[LOOSE_LOCAL_FIELD][:nf] - self.loose_local_band, 0.0)
+            drive[wall_rows(s.table, nf)] = excess
+            s.drho[:nf][loose] -= self.rate * self.c0 / s.h[:nf][loose] * s.rho[:nf][loose] * drive[loose]
+        else:
+            s.drho[:nf][loose] -= self.rate * self.c0 / s.h[:nf][loose] * s.rho[:nf][loose] * excess
         self.loose_evaluations += 1
+
+    def _measure_local(self, s: FluidState, in_run: NDArray[np.bool_]) -> None:
+        """The local part's field (module docstring): while the volume error is past the loose
+        band, each fluid particle still in the run gets its neighbourhood's excess
+        (:func:`~mlsgalerkin.fluid.distribution.neighbourhood_excess` of the
+        :func:`~mlsgalerkin.fluid.distribution.cell_volumes` shares); 0 elsewhere and otherwise."""
+        nf = s.n_fluid
+        field = s.extra[LOOSE_LOCAL_FIELD]
+        field[:] = 0.0
+        if self.loose_error <= self.loose_band or not in_run.any():
+            return
+        x = np.ascontiguousarray(s.x[:nf][in_run])
+        volume = s.M[:nf][in_run] / s.rho[:nf][in_run]
+        measured = neighbourhood_excess(x, cell_volumes(x, s.spacing), volume, s.spacing)
+        field[np.flatnonzero(in_run)] = measured
+        self.loose_local_largest = max(self.loose_local_largest, float(measured.max()))
 
     def summary(self) -> dict[str, Any]:
         if self.idle:
@@ -418,9 +491,13 @@ class VolumeConsistency(Effect):
     def _loose_summary(self) -> dict[str, Any]:
         if not self.loose_band:
             return {}
-        return {"loose_band": self.loose_band, "loose_every": self.loose_every, "splash": self.splash,
-                "loose_volume_error_largest": self.loose_error_largest,
-                "loose_active_share": self.loose_evaluations / self.evaluations if self.evaluations else 0.0}
+        out = {"loose_band": self.loose_band, "loose_every": self.loose_every, "splash": self.splash,
+               "loose_volume_error_largest": self.loose_error_largest,
+               "loose_active_share": self.loose_evaluations / self.evaluations if self.evaluations else 0.0}
+        if self.loose_local:
+            out.update(loose_local=self.loose_local, loose_local_band=self.loose_local_band,
+                       loose_local_excess_largest=self.loose_local_largest)
+        return out
 
     def _droplet_summary(self) -> dict[str, Any]:
         if not self.droplet_rate:
@@ -433,7 +510,7 @@ class VolumeConsistency(Effect):
                 "active_evaluations": self.active_evaluations, "surface_evaluations": self.surface_evaluations,
                 "loose_error": self.loose_error, "loose_error_largest": self.loose_error_largest,
                 "loose_evaluations": self.loose_evaluations, "droplet_evaluations": self.droplet_evaluations,
-                "droplets_largest": self.droplets_largest}
+                "droplets_largest": self.droplets_largest, "loose_local_largest": self.loose_local_largest}
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
         self.gap_mean_largest = float(d.get("gap_mean_largest", 0.0))
@@ -445,3 +522,4 @@ class VolumeConsistency(Effect):
         self.loose_evaluations = int(d.get("loose_evaluations", 0))
         self.droplet_evaluations = int(d.get("droplet_evaluations", 0))
         self.droplets_largest = int(d.get("droplets_largest", 0))
+        self.loose_local_largest = float(d.get("loose_local_largest", 0.0))
