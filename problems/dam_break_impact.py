@@ -29,12 +29,14 @@ tension treatment ``negative_pressure``, with the pressure's linear fit integrat
 measured choice of each is in ``docs/theory/stabilisation.md``.
 
 Rerun 2026-12-04 with the volume consistency's loose side and droplets (``impact.md``): P1 peak
-2.84 at 40 rows (+9.8 %, RMS 0.293 / 0.473 / 0.220 / 0.177) and 3.10 at 80 rows (+19.7 %, a
-single run outside the 15 % goal). **Its three round-off twins, rerun at the same code, read 2.86,
+2.84 at 40 rows (+9.8 %; RMS 0.297 / 0.473 / 0.215 / 0.184 since its local part joined the set,
+commit 18d70bb, 0.293 / 0.473 / 0.220 / 0.177 before) and 3.10 at 80 rows (+19.7 %, a
+single run outside the 15 % goal; the 80-row runs never reach the loose band, so the local part
+leaves them bit for bit). **Its three round-off twins, rerun at the same code, read 2.86,
 2.36 and 2.55: the four runs' mean is 2.72 (+5.0 %, standard deviation 0.33), and three of the
 four are within the goal** (``impact_scatter.md``, 2026-12-04). Family against family, the RMS
-deviation falls with resolution at every sensor (means 0.315 / 0.476 / 0.208 / 0.166 at 40 rows,
-0.198 / 0.210 / 0.149 / 0.129 at 80) and so does the raw peak (means 6.99 and 6.40); at 40 rows
+deviation falls with resolution at every sensor (means 0.328 / 0.483 / 0.218 / 0.180 at 40 rows,
+0.315 / 0.476 / 0.208 / 0.166 before the local part; 0.198 / 0.210 / 0.149 / 0.129 at 80) and so does the raw peak (means 6.99 and 6.40); at 40 rows
 the family is tight (P1 2.825–2.853, mean 2.84, +9.7 %). Earlier, at the defaults of 2026-12-03:
 
 Measured at the defaults (``verification/results/fluid_core/impact.md``, ``H = 0.6`` m, to

@@ -8,7 +8,7 @@ import pytest
 
 from mlsgalerkin.fluid import lattice
 from mlsgalerkin.fluid.distribution import cell_volumes, neighbourhood_excess
-from verification.volume_attribution import CLASSES, frame_attribution
+from verification.volume_attribution import CLASSES, FLOOR, frame_attribution
 
 DX = 0.01
 
@@ -44,6 +44,10 @@ def test_a_stretched_top_row_carries_the_error():
     assert top_excess > 0.8 * row["volume_error"]          # the loose row carries it, the row under it the rest
     assert top_excess + (shares[under] - DX**2).sum() / total == pytest.approx(row["volume_error"], rel=1e-9)
     assert row["sheets and ragged surface: contribution"] > 0.5 * row["volume_error"]  # ... most of it 3-4 neighbours
+    floor = np.arange(len(x)) >= len(block)                 # the loose row at the cavitation floor
+    split = frame_attribution(x, np.full(len(x), DX**2), DX, shares, floor)
+    assert split[f"{FLOOR}: contribution"] == pytest.approx(top_excess, rel=1e-12)
+    assert split[f"{FLOOR}: particles"] == pytest.approx(len(top) / len(x))
     excess = neighbourhood_excess(x, shares, np.full(len(x), DX**2), DX)
     deep = x[:, 1] < 0.05
     assert excess[len(block):].mean() > 0.05 and np.abs(excess[deep]).max() < 1e-12

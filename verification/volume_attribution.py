@@ -53,15 +53,19 @@ RUNS = (
 #: Neighbour counts within :data:`REACH` spacings of each class (inclusive bounds).
 CLASSES = (("drops", 0, 0), ("sheets and ragged surface", 1, 4), ("surface rows and bulk", 5, 10**6))
 REACH = 1.5
+#: The particles at the cavitation floor (``p ≤ 0``): their density is ``ρ0`` and cannot fall.
+FLOOR = "at the cavitation floor"
 #: The settled state: the frames of the run's last this many seconds.
 SETTLED = 1.0
 
 
 def frame_attribution(x: np.ndarray, volume: np.ndarray, spacing: float,
-                      shares: np.ndarray | None = None) -> dict[str, float]:
+                      shares: np.ndarray | None = None, floor: np.ndarray | None = None) -> dict[str, float]:
     """The volume error of one frame and each class's share of the particles and contribution to
     it (fractions). ``x (n, d)`` fluid positions (m), ``volume (n,)`` their ``M/ρ`` (m^d),
-    ``shares (n,)`` their :func:`cell_volumes` (m^d; computed when not given)."""
+    ``shares (n,)`` their :func:`cell_volumes` (m^d; computed when not given). With ``floor``
+    (bool ``(n,)``: the particles at the cavitation floor, ``p ≤ 0``), also the share and the
+    contribution of those: no density relaxation can give them volume."""
     if shares is None:
         shares = cell_volumes(x, spacing)
     neighbours = cKDTree(x).query_ball_point(x, REACH * spacing, return_length=True) - 1
@@ -73,6 +77,9 @@ def frame_attribution(x: np.ndarray, volume: np.ndarray, spacing: float,
         row[f"{name}: contribution"] = float((shares[inside] - volume[inside]).sum()) / total
         row[f"{name}: excess per particle"] = (float(((shares[inside] - volume[inside]) / volume[inside]).mean())
                                                if inside.any() else float("nan"))
+    if floor is not None:
+        row[f"{FLOOR}: particles"] = float(floor.mean())
+        row[f"{FLOOR}: contribution"] = float((shares[floor] - volume[floor]).sum()) / total
     return row
 
 
@@ -84,7 +91,7 @@ def run_attribution(run: Path, after: float) -> tuple[dict, tuple[np.ndarray, np
     spacing = float(summary["parameters"]["dx"])
     arrays, _ = load_checkpoint(latest_checkpoint(run / "checkpoints"))
     mass = arrays["fluid__M"]
-    rows, times, worst, worst_error = [], [], None, -np.inf
+    rows, times, worst, worst_error, worst_row = [], [], None, -np.inf, {}
     for t, path in read_pvd(run / "particles.pvd"):
         if t < after:
             continue
@@ -96,16 +103,20 @@ def run_attribution(run: Path, after: float) -> tuple[dict, tuple[np.ndarray, np
         x = np.ascontiguousarray(points[fluid, :2])
         volume = mass[fluid] / np.asarray(data["density"])[fluid]
         shares = cell_volumes(x, spacing)
-        row = frame_attribution(x, volume, spacing, shares)
+        row = frame_attribution(x, volume, spacing, shares, np.asarray(data["pressure"])[fluid] <= 0.0)
         rows.append(row)
         if row["volume_error"] > worst_error:
             worst_error = row["volume_error"]
             worst = (x, neighbourhood_excess(x, shares, volume, spacing, REACH), t)
+            worst_row = row
     keys = rows[0].keys()
     series = np.genfromtxt(run / "timeseries.csv", delimiter=",", names=True)
     out = {"spacing_mm": 1e3 * spacing, "frames": len(rows), "after_s": after,
+           "run_commit": summary.get("provenance", {}).get("git_commit", ""),
            "largest_sample_error": float(np.nanmax(series["volume_error"])),
-           "largest_frame_error": max(r["volume_error"] for r in rows)}
+           "largest_frame_error": max(r["volume_error"] for r in rows),
+           "largest frame: time_s": worst[2],
+           f"largest frame: {FLOOR} contribution": worst_row[f"{FLOOR}: contribution"]}
     out.update({k: float(np.nanmean([r[k] for r in rows])) for k in keys})   # a frame without drops has no per-particle excess for them
     last = [r for t, r in zip(times, rows) if t >= times[-1] - SETTLED]
     out["last second: volume_error"] = float(np.mean([r["volume_error"] for r in last]))
@@ -119,9 +130,13 @@ INTRO = ("Each fluid particle's share of the geometric volume (`mlsgalerkin.flui
          "Classes by the number of other particles within 1.5 spacings (8 inside a square lattice, 5 in a flat "
          "free surface): drops (none), sheets and ragged surface (1 to 4), surface rows and bulk (5 or more). "
          "For each: its share of the particles, its contribution Σ (v − M/ρ) / Σ M/ρ to the volume error, and "
-         "the mean of (v − M/ρ)/(M/ρ) over its particles.")
-COLUMNS = ["case", "spacing_mm", "frames", "after_s", "largest_sample_error", "largest_frame_error", "volume_error"] + [
+         "the mean of (v − M/ρ)/(M/ρ) over its particles. Across the classes, the particles at the cavitation "
+         "floor (p ≤ 0: their density is ρ0 and cannot fall, so no density relaxation gives them volume): their "
+         "share and contribution, on average and at the frame of the largest error.")
+COLUMNS = ["case", "spacing_mm", "run_commit", "frames", "after_s", "largest_sample_error", "largest_frame_error",
+           "largest frame: time_s", f"largest frame: {FLOOR} contribution", "volume_error"] + [
     f"{name}: {what}" for name, _, _ in CLASSES for what in ("particles", "contribution", "excess per particle")] + [
+    f"{FLOOR}: particles", f"{FLOOR}: contribution",
     "last second: volume_error", "last second: sheets and ragged surface contribution"]
 
 
