@@ -109,8 +109,8 @@ whose table row lists no wall node relax by
 The rows within a support of a wall keep the global drive only: there the fluid–wall gap reads as
 looseness, and relaxing it took the water's pressure off ``beam_clamped``'s beam (its tip swung
 9 mm instead of 14–17 mm at 1.3 s). Measured in ``beam_clamped`` at 4 mm
-(``docs/theory/stabilisation.md`` §10): the largest error 2.27 → 1.29 %, its largest 50 ms mean
-1.80 → 0.99 %, the tip's motion as before. What is left sits at the cavitation floor: the jet
+(``docs/theory/stabilisation.md`` §10): the largest error 2.27 → 1.33 %, its largest 50 ms mean
+1.80 → 0.88 %, the tip's motion as before (``beam_on_spring``: 1.64 → 1.22 %). What is left sits at the cavitation floor: the jet
 that climbs the beam at its first load stretches at ``ρ0``, where no density relaxation can give
 it volume.
 
