@@ -61,8 +61,9 @@ is at the cavitation floor.
 At ``--dx 0.0025`` (one thread, 1 516 s beside another run, 92 135 steps, 2026-12-04, with the
 local part) the tip period reads 0.5928 s (−0.7 %), largest tip deflection 16.9 mm, the volume up
 to +1.23 % (at 0.43 s, the jet at the first load; above 1 % in 73 samples from 0.25 to 0.5 s and one after; +0.43 % over
-the last second; +1.46 % and 0.5942 s before the local part); at ``--dx 0.002`` (3 738 s on a
-shared machine, 115 988 steps, before the local part) 0.5949 s (−0.4 %); no particle
+the last second; +1.46 % and 0.5942 s before the local part); at ``--dx 0.002`` (1 830 s on two
+threads, 114 783 steps, with the local part) 0.5936 s (−0.6 %), 16.2 mm, the volume up to +1.30 %
+(at 0.41 s, the jet again; +1.43 % and 0.5949 s before the local part); no particle
 behind a wall. ``--set void_memory=0.2`` (the floor remembers part of the expansion) gave 3.0 %
 before the volume consistency joined the set (period 0.5858 s, −1.9 %); it raises the pressure
 noise of the dam break with impact.
