@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
 
-from mlsgalerkin.fluid.distribution import cell_volumes, neighbourhood_excess
+from mlsgalerkin.fluid.distribution import NEIGHBOURHOOD_REACH, cell_volumes, neighbourhood_excess
 from mlsgalerkin.io import atomic_write, csv_text, format_cell, provenance, read_pvd, read_vtu
 from mlsgalerkin.io.checkpoint import latest_checkpoint, load_checkpoint
 
@@ -52,7 +52,7 @@ RUNS = (
 )
 #: Neighbour counts within :data:`REACH` spacings of each class (inclusive bounds).
 CLASSES = (("drops", 0, 0), ("sheets and ragged surface", 1, 4), ("surface rows and bulk", 5, 10**6))
-REACH = 1.5
+REACH = NEIGHBOURHOOD_REACH
 #: The particles at the cavitation floor (``p ≤ 0``): their density is ``ρ0`` and cannot fall.
 FLOOR = "at the cavitation floor"
 #: The settled state: the frames of the run's last this many seconds.

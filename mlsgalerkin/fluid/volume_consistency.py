@@ -475,12 +475,12 @@ class VolumeConsistency(Effect):
         if excess <= 0.0:
             return
         loose = loose_particles(s.table.kernel_sum[:nf], deep, reference=self.reference, splash=self.splash)
-        if local:
-            drive = excess + self.loose_local * np.maximum(s.extra[LOOSE_LOCAL_FIELD][:nf] - self.loose_local_band, 0.0)
-            drive[wall_rows(s.table, nf)] = excess
-            s.drho[:nf][loose] -= self.rate * self.c0 / s.h[:nf][loose] * s.rho[:nf][loose] * drive[loose]
-        else:
-            s.drho[:nf][loose] -= self.rate * self.c0 / s.h[:nf][loose] * s.rho[:nf][loose] * excess
+        drive: float | FloatArray = excess
+        if local:                           # the wall rows keep the global drive only
+            field = excess + self.loose_local * np.maximum(s.extra[LOOSE_LOCAL_FIELD][:nf] - self.loose_local_band, 0.0)
+            field[wall_rows(s.table, nf)] = excess
+            drive = field[loose]
+        s.drho[:nf][loose] -= self.rate * self.c0 / s.h[:nf][loose] * s.rho[:nf][loose] * drive
         self.loose_evaluations += 1
 
     def _measure_local(self, s: FluidState, in_run: NDArray[np.bool_]) -> None:
