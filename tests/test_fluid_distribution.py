@@ -239,6 +239,32 @@ def test_the_shares_add_up_to_the_geometric_volume(dim):
     assert shares.std() > 0.05 * DX**dim
 
 
+@pytest.mark.parametrize("dim, tile", [(1, 40), (2, 24), (3, 16)])
+def test_tiled_shares_are_the_shares_of_one_grid(dim, tile, rng):
+    """Tiles far smaller than the fluid split the union exactly as one grid over the bounding
+    box does: every share the same to the last bit, and their sum the tiled geometric volume."""
+    upper = {1: (0.3,), 2: (0.12, 0.09), 3: (0.05, 0.04, 0.04)}[dim]
+    x = lattice((0.0,) * dim, upper, DX)
+    x = x * 1.15 + rng.uniform(-0.3, 0.3, x.shape) * DX
+    one_grid = cell_volumes(x, DX, tile=10**6)
+    tiled = cell_volumes(x, DX, tile=tile)
+    np.testing.assert_array_equal(tiled, one_grid)
+    assert tiled.sum() == pytest.approx(geometric_volume(x, DX, tile=tile), rel=1e-12)
+
+
+def test_a_splash_far_from_the_bulk_gets_its_own_cell_in_3d(rng):
+    """A 3D block with drops flown metres away: each drop gets its own cell, the block's shares
+    are those without the drops, at full resolution (one grid over that bounding box would hold
+    10^12 voxels)."""
+    block = lattice((0.0, 0.0, 0.0), (0.1, 0.08, 0.06), DX) + rng.uniform(-0.2, 0.2, (1, 3)) * DX
+    block = block + rng.uniform(-0.25, 0.25, block.shape) * DX
+    drops = np.array([[3.0, 0.2, 0.1], [-2.5, 4.0, 1.0], [0.05, 0.04, -6.0]])
+    shares = cell_volumes(np.vstack([block, drops]), DX)
+    np.testing.assert_allclose(shares[-3:], DX**3, rtol=1e-12)
+    np.testing.assert_array_equal(shares[:-3], cell_volumes(block, DX))
+    assert shares.sum() == pytest.approx(geometric_volume(np.vstack([block, drops]), DX), rel=1e-12)
+
+
 def test_a_stretched_sheet_reads_its_closed_gaps():
     """A row of particles 1.3 spacings apart: the closing fills the 0.3-spacing gaps between their
     cells, and each inner particle gets its cell and half of each gap beside it, 1.3 Δx² on average; 1.8

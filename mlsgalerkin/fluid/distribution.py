@@ -60,8 +60,9 @@ do not set it either. :func:`occupancy` (one grid, coarsened above :data:`MAX_PI
 pictures and tests.
 
 **Where a volume error sits.** :func:`cell_volumes` splits the closed union among the particles,
-each pixel to the nearest one, so each particle's share ``v_i`` against its ``M_i/ρ_i`` says where
-the fluid is looser or tighter than its densities (``verification/volume_attribution.py`` sorts
+each pixel to the nearest one (tile by tile, as :func:`geometric_volume` counts them, so the shares
+add up to its measure and a splash flown far away costs its own tile), so each particle's share
+``v_i`` against its ``M_i/ρ_i`` says where the fluid is looser or tighter than its densities (``verification/volume_attribution.py`` sorts
 them by their neighbours; ``docs/theory/stabilisation.md`` §10 has what it found in the splashing
 flows). A single share moves by a pixel column with the phase (a quarter of a cell at four pixels
 per spacing); sums over a neighbourhood or a class of particles do not:
@@ -246,24 +247,29 @@ def occupancy(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = 
 
 
 def cell_volumes(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = PIXELS_PER_SPACING,
-                 closed_gap: float = CLOSED_GAP) -> NDArray[np.float64]:
-    r"""Each particle's share ``(n,)`` (m^d) of the geometric volume: every pixel of
-    :func:`occupancy`'s closed union goes to the particle nearest its centre (a Voronoi split of
-    the union on the pixel grid), so the shares add up to the union's measure, and
-    ``v_i / (M_i/ρ_i) − 1`` says *where* a volume error sits. A particle deep in a lattice gets its
-    cell, :math:`\Delta x^d`, exactly; one whose neighbours have moved apart gets the closed gaps
-    beside it (a particle of a stretched surface: more than its cell); one that shares its cell
-    with a close neighbour, less. ``x (n, d)`` positions (m), ``spacing`` Δx (m). One grid over the
-    bounding box (coarsened as :func:`occupancy`'s): a diagnostic of frames, not of every step."""
+                 closed_gap: float = CLOSED_GAP, tile: int | None = None) -> NDArray[np.float64]:
+    r"""Each particle's share ``(n,)`` (m^d) of the geometric volume: every pixel of the closed
+    union that :func:`geometric_volume` measures goes to the particle nearest its centre (a Voronoi
+    split of the union on the pixel grid), so the shares add up to :func:`geometric_volume`'s
+    measure, and ``v_i / (M_i/ρ_i) − 1`` says *where* a volume error sits. A particle deep in a
+    lattice gets its cell, :math:`\Delta x^d`, exactly; one whose neighbours have moved apart gets
+    the closed gaps beside it (a particle of a stretched surface: more than its cell); one that
+    shares its cell with a close neighbour, less. ``x (n, d)`` positions (m), ``spacing`` Δx (m).
+
+    The pixels come tile by tile as :func:`geometric_volume`'s (``tile``, the same choice of one
+    grid or tiles), so a splash flown far from the bulk costs its own tile, in 3D too; each tile's
+    pixels go to their nearest particle among all of them (one :class:`scipy.spatial.cKDTree`)."""
     x = np.ascontiguousarray(x, dtype=np.float64)
     n, dim = x.shape
     if n == 0:
         return np.zeros(0)
-    grid, pixel, origin = _closed_grid(x, spacing, pixels_per_spacing, closed_gap)
-    inside = np.nonzero(grid.reshape(grid.shape[:dim]))
-    centres = np.stack([origin[a] + (inside[a] + 0.5) * pixel for a in range(dim)], axis=1)
-    _, owner = cKDTree(x).query(centres)
-    return np.bincount(owner, minlength=n) * pixel**dim
+    tree = cKDTree(x)
+    count = np.zeros(n, dtype=np.int64)
+    for centres in _closed_pixel_centres(x, spacing, pixels_per_spacing, closed_gap, tile):
+        if centres.shape[0]:
+            _, owner = tree.query(centres)
+            count += np.bincount(owner, minlength=n)
+    return count * (spacing / int(pixels_per_spacing)) ** dim
 
 
 def neighbourhood_excess(x: NDArray[np.float64], shares: NDArray[np.float64], volume: NDArray[np.float64],
@@ -333,10 +339,11 @@ def _tiles(u_lo: NDArray[np.int64], u_hi: NDArray[np.int64], tile: int) -> tuple
     return np.concatenate(owners), np.concatenate(keys)
 
 
-def _closed_count(x, u_lo, u_hi, origin, pixel, spacing, r, size, core_lo, tile) -> int:
-    """Pixels of the closed union of the cells of ``x`` inside the tile whose first pixel index is
-    ``core_lo (d,)`` (all of them when ``core_lo`` is None), on a grid cropped to the cells'
-    reach (pixel indices ``u_lo``, ``u_hi``) and padded by ``r + 1`` zero pixels."""
+def _closed_window(x, u_lo, u_hi, origin, pixel, spacing, r, size, core_lo, tile):
+    """The closed union of the cells of ``x`` inside the tile whose first pixel index is
+    ``core_lo (d,)`` (all of it when ``core_lo`` is None), on a grid cropped to the cells' reach
+    (pixel indices ``u_lo``, ``u_hi``) and padded by ``r + 1`` zero pixels: ``(window, first)``,
+    the closed grid's pixels in the tile and the global pixel index ``(d,)`` of its first one."""
     dim = x.shape[1]
     reach = 2 * r + 1
     lo = u_lo.min(axis=0)
@@ -354,11 +361,14 @@ def _closed_count(x, u_lo, u_hi, origin, pixel, spacing, r, size, core_lo, tile)
     _rasterise(x, local_origin, pixel, 0.5 * spacing, shape, grid)
     grid = _close(grid, size)
     if core_lo is None:
-        return int(np.count_nonzero(grid))
+        return grid, lo
     window = [slice(None)] * 3
+    start = lo.copy()
     for a in range(dim):
-        window[a] = slice(max(core_lo[a] - lo[a], 0), max(core_lo[a] + tile - lo[a], 0))
-    return int(np.count_nonzero(grid[tuple(window)]))
+        begin = max(core_lo[a] - lo[a], 0)
+        window[a] = slice(begin, max(core_lo[a] + tile - lo[a], 0))
+        start[a] = lo[a] + begin
+    return grid[tuple(window)], start
 
 
 def geometric_volume(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int = PIXELS_PER_SPACING,
@@ -380,6 +390,19 @@ def geometric_volume(x: NDArray[np.float64], spacing: float, pixels_per_spacing:
     x = np.ascontiguousarray(x, dtype=np.float64)
     if x.shape[0] == 0:
         return 0.0
+    pixel = spacing / int(pixels_per_spacing)
+    count = sum(int(np.count_nonzero(window)) for window, _ in _closed_windows(x, spacing, pixels_per_spacing,
+                                                                                closed_gap, tile))
+    return float(count) * pixel ** x.shape[1]
+
+
+def _closed_windows(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int, closed_gap: float,
+                    tile: int | None):
+    """The closed union of the cells of ``x (n, d)`` as :func:`geometric_volume` builds it: yields
+    ``(window, first)`` per grid, ``window`` the closed grid's ``uint8`` pixels that this grid
+    counts (one grid: all of them; a tile: its own) and ``first (d,)`` the global pixel index of
+    ``window``'s first pixel (pixel ``u`` has its centre at ``corner + (u + ½) pixel``, ``corner``
+    of :func:`grid_lower_corner`). The windows do not overlap, and together they hold the union."""
     dim = x.shape[1]
     k = int(pixels_per_spacing)
     r = closing_radius(closed_gap, k)
@@ -401,18 +424,33 @@ def geometric_volume(x: NDArray[np.float64], spacing: float, pixels_per_spacing:
     box = float(np.prod(span.astype(float)))
     compact = automatic and box <= max(SINGLE_GRID_FILL * x.shape[0] * float(k) ** dim, SINGLE_GRID_PIXELS)
     if compact or box <= float(tile) ** dim:           # one grid over the whole fluid
-        return float(_closed_count(x, u_lo, u_hi, origin, pixel, spacing, r, size, None, tile)) * pixel ** dim
+        yield _closed_window(x, u_lo, u_hi, origin, pixel, spacing, r, size, None, tile)
+        return
     owner, key = _tiles(u_lo - reach, u_hi + reach, tile)
     order = np.lexsort(key.T[::-1])
     owner, key = owner[order], key[order]
     starts = np.flatnonzero(np.r_[True, np.any(key[1:] != key[:-1], axis=1)])
     ends = np.r_[starts[1:], owner.size]
-    count = 0
     for a0, a1 in zip(starts, ends):                   # one pass per occupied tile
         members = owner[a0:a1]
-        count += _closed_count(x[members], u_lo[members], u_hi[members], origin, pixel, spacing, r, size,
-                               key[a0] * tile, tile)
-    return float(count) * pixel ** dim
+        yield _closed_window(x[members], u_lo[members], u_hi[members], origin, pixel, spacing, r, size,
+                             key[a0] * tile, tile)
+
+
+def _closed_pixel_centres(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int, closed_gap: float,
+                          tile: int | None):
+    """The centres ``(m, d)`` (m) of the closed union's pixels, one array per window of
+    :func:`_closed_windows`, written ``base + (u + pad + ½) pixel`` with ``base = corner − pad
+    pixel`` and ``pad = r + 1``: the same floating-point numbers as one padded grid over the
+    bounding box gives them (so a share does not move with the tiling)."""
+    dim = x.shape[1]
+    k = int(pixels_per_spacing)
+    pixel = spacing / k
+    pad = closing_radius(closed_gap, k) + 1
+    base = grid_lower_corner(x, spacing, pixel) - pad * pixel
+    for window, first in _closed_windows(x, spacing, pixels_per_spacing, closed_gap, tile):
+        inside = np.nonzero(window.reshape(window.shape[:dim]))
+        yield np.stack([base[a] + ((inside[a] + (first[a] + pad)) + 0.5) * pixel for a in range(dim)], axis=1)
 
 
 # --------------------------------------------------------------------------------------
