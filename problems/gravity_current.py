@@ -128,7 +128,8 @@ class Parameters:
     rho_light: float = 1000.0      #: density of the light fluid, left of the lock (kg/m³)
     rho_heavy: float = 1500.0      #: density of the heavy fluid, right of the lock (kg/m³)
     viscosity: float = 1.0e-3      #: dynamic viscosity of both fluids; 0 drops the effect (Pa s)
-    dx: float = 0.003              #: particle spacing (m)
+    dx: float = 0.0                #: particle spacing; 0 picks depth / rows, 3 mm at the default depth (m)
+    rows: int = 20                 #: particle rows across the depth when dx is 0 (–)
     t_end: float = 0.8             #: end time (s)
     c0: float = 0.0                #: sound speed; 0 picks 10 max(2.5 v_h, sqrt(g D)) (m/s)
     alpha: float = 0.01            #: Monaghan artificial viscosity α; the recommended 0.02 runs the head 10–15 % slow at the coarser spacings (module docstring) (–)
@@ -155,6 +156,15 @@ def reference_head_speed(p: Parameters) -> float:
     return 0.4 * math.sqrt(p.g * tank(p)[1] * (p.rho_heavy - p.rho_light) / p.rho_light)
 
 
+def spacing(p: Parameters) -> float:
+    """The particle spacing ``Δx`` (m): the parameter ``dx``, or for ``dx = 0`` the spacing of
+    ``rows`` rows across the depth, ``D / rows`` rounded to 10⁻¹² m (so that 0.06 m / 20 is
+    3 mm to the bit): 20 rows, where the 3 × 3 matrix is validated, at every depth."""
+    if p.dx != 0:
+        return p.dx
+    return round(p.depth / p.rows, 12)
+
+
 def sound_speed(p: Parameters) -> float:
     """``c0`` (m/s): the parameter, or for ``c0 = 0`` ten times the larger of the expected
     largest speed ``2.5 v_h`` and the long-wave speed ``sqrt(g D)`` (density variations of
@@ -170,7 +180,8 @@ def tank(p: Parameters) -> tuple[float, float]:
     the outer particle row (with ``depth = 0.04`` m and ``Δx = 3`` mm the 13 rows would otherwise
     leave a gap of 0.83 Δx under the lid, which the compressed fluid expands into). The
     reference head speed is the formula's at the simulated depth."""
-    return max(round(p.length / p.dx), 1) * p.dx, max(round(p.depth / p.dx), 1) * p.dx
+    dx = spacing(p)
+    return max(round(p.length / dx), 1) * dx, max(round(p.depth / dx), 1) * dx
 
 
 def make_scene(p: Parameters = Parameters()) -> Scene:
@@ -178,24 +189,25 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
     light = Phase("light", p.rho_light, p.viscosity)
     heavy = Phase("heavy", p.rho_heavy, p.viscosity)
     length, depth = tank(p)
-    body = FluidBody.block("fluid", (0.0, 0.0), (length, depth), p.dx, [light, heavy])
+    dx = spacing(p)
+    body = FluidBody.block("fluid", (0.0, 0.0), (length, depth), dx, [light, heavy])
     x, y = body.positions[:, 0], body.positions[:, 1]
     body.phase[:] = (x > 0.5 * length).astype(np.int64)
     rho0 = body.reference_density
     top_pressure = p.lid_pressure_factor * p.rho_heavy * p.g * depth if p.lid else 0.0
     body.density[:] = hydrostatic_density(rho0, depth - y, p.g, sound_speed(p), top_pressure, compressible=True)
     top = depth if p.lid else 1.5 * depth
-    walls = wall_box((0.0, 0.0), (length, top), p.dx, layers=3, open_top=not p.lid,
+    walls = wall_box((0.0, 0.0), (length, top), dx, layers=3, open_top=not p.lid,
                      reference_density=p.rho_light, surface=p.penalty_walls)
     c0 = sound_speed(p)
     u_max = reference_head_speed(p) * 2.5
     scheme = water(c0, u_max=u_max, gravity=(0.0, -p.g), slip=p.slip, alpha=p.alpha,
                    flow=(reference_head_speed(p), depth), newtonian=p.viscosity > 0, delta=p.delta,
                    shifting=p.shifting, density_filter=p.density_filter, negative_pressure=p.negative_pressure,
-                   penalty_thickness=0.25 * p.dx if p.penalty_walls else None,
+                   penalty_thickness=0.25 * dx if p.penalty_walls else None,
                    consistent_integration=p.consistent_integration, linear_consistency=p.linear_consistency,
                    volume_consistency=p.volume_consistency,
-                   spacing=p.dx, h_factor=p.h_factor,
+                   spacing=dx, h_factor=p.h_factor,
                    extra=[ClosedVolume()] if p.lid and p.closed_volume else [])
     n_fluid = body.n
     half = 0.5 * depth
@@ -204,18 +216,18 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
         s = state.fluid
         f = slice(0, n_fluid)
         sel = (s.phase[f] == 1) & (s.x[f, 1] < half)
-        return kth_smallest(s.x[f][sel, 0], 2) - 0.5 * p.dx
+        return kth_smallest(s.x[f][sel, 0], 2) - 0.5 * dx
 
     def light_front_x(state) -> float:
         s = state.fluid
         f = slice(0, n_fluid)
         sel = (s.phase[f] == 0) & (s.x[f, 1] > half)
-        return -kth_smallest(-s.x[f][sel, 0], 2) + 0.5 * p.dx
+        return -kth_smallest(-s.x[f][sel, 0], 2) + 0.5 * dx
 
     def top_row_pressure(state) -> np.ndarray:
         s = state.fluid
         y = s.x[:n_fluid, 1]
-        return s.p[:n_fluid][y > depth - p.dx]
+        return s.p[:n_fluid][y > depth - dx]
 
     def top_pressure_spread(state) -> float:
         top = top_row_pressure(state)
@@ -304,7 +316,7 @@ def analyse(result, p: Parameters) -> dict:
                  "top_pressure_spread_median_over_drho_g_d": float(np.median(spread) / scale),
                  "top_pressure_mean_start_pa": float(mean[0]), "top_pressure_mean_end_pa": float(mean[-1])}
     out = {**noise, "reference_head_speed_m_s": ref, "energy_conserving_froude_number": 0.5,
-           "rows_per_depth": depth / p.dx, "depth_simulated_m": depth, "length_simulated_m": length, "fit": fit}
+           "rows_per_depth": depth / spacing(p), "depth_simulated_m": depth, "length_simulated_m": length, "fit": fit}
     if fit["speed"] is None:
         # at about the reference speed the head crosses the window's end at 0.8 lock_x / U (+10 %: it starts at rest)
         text = not_measured(out, ("head_speed_m_s", "relative_error", "froude_number"), fit["note"],
@@ -326,20 +338,25 @@ def analyse(result, p: Parameters) -> dict:
 
 def check(p: Parameters) -> list[str]:
     """Problems with the parameters (see ``mlsgalerkin.problem``)."""
-    out = require_positive(p, "depth", "length", "rho_light", "rho_heavy", "dx", "t_end", "h_factor", "g",
+    out = require_positive(p, "depth", "length", "rho_light", "rho_heavy", "t_end", "h_factor", "g",
                            "frame_every")
-    out += require_nonnegative(p, "viscosity", "alpha", "delta", "c0", "density_filter")
+    out += require_nonnegative(p, "viscosity", "alpha", "delta", "c0", "density_filter", "dx")
     out += require(p.shifting in SHIFTING_MODES,
                    f"shifting = {p.shifting!r}: choose one of {', '.join(SHIFTING_MODES)}")
     out += require(p.negative_pressure in ("allow", "clamp", "cavitate"),
                    f"negative_pressure = {p.negative_pressure!r}: choose one of allow, clamp, cavitate")
     out += require_nonnegative(p, "lid_pressure_factor")
+    if p.dx == 0:
+        out += require(isinstance(p.rows, int) and p.rows >= 4,
+                       f"rows = {p.rows!r}: give a whole number of particle rows across the depth, at least 4 "
+                       "(20 is the validated default), or a spacing dx")
     if not out:
         out += require(p.rho_heavy > p.rho_light,
                        f"rho_heavy = {p.rho_heavy:g} must exceed rho_light = {p.rho_light:g}: the heavy fluid runs "
                        "under the light one")
-        out += require(p.depth >= 4 * p.dx, f"dx = {p.dx:g} m leaves fewer than 4 particle rows in the {p.depth:g} m "
-                                            f"depth; choose dx <= {p.depth / 4:g} m")
-        out += require(p.length >= 8 * p.dx, f"the tank ({p.length:g} m) must be at least 8 particles long")
+        dx = spacing(p)
+        out += require(p.depth >= 4 * dx, f"dx = {dx:g} m leaves fewer than 4 particle rows in the {p.depth:g} m "
+                                          f"depth; choose dx <= {p.depth / 4:g} m")
+        out += require(p.length >= 8 * dx, f"the tank ({p.length:g} m) must be at least 8 particles long")
     out += require(p.slip in ("free_slip", "no_slip", "fixed"), f"slip must be free_slip, no_slip or fixed, got {p.slip!r}")
     return out
