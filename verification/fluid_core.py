@@ -73,9 +73,11 @@ def gravity_cases(quick: bool) -> list[tuple[str, dict]]:
     if quick:
         return [("D=0.06 drho=0.5 (5 rows)", {"depth": 0.06, "dx": 0.012, "t_end": 0.3, "gif": False})]
     out = []
-    for depth, ratio in [(d, r) for d in (0.04, 0.06, 0.12) for r in (0.1, 0.5, 1.0)] + [(0.06, 0.03)]:
+    # the matrix, the weakly stratified lock exchange in the scaled tank, and the deep
+    # weakly stratified case in the 0.34 m tank (+16 % at the former default 3 mm, +2.4 % at 20 rows)
+    for depth, ratio in [(d, r) for d in (0.04, 0.06, 0.12) for r in (0.1, 0.5, 1.0)] + [(0.06, 0.03), (0.09, 0.05)]:
         speed = 0.4 * math.sqrt(9.81 * depth * ratio)
-        tanks = [("scaled tank", 0.34 * depth / 0.06, depth / 20, "20 rows")]
+        tanks = [("scaled tank", 0.34 * depth / 0.06, depth / 20, "20 rows")] if ratio != 0.05 else []
         if ratio != 0.03:
             tanks += [("0.34 m tank", 0.34, None, "default spacing (20 rows)")]   # the problem's dx = D / 20
             if not math.isclose(depth / 20, 0.003):   # at D = 0.06 m, 20 rows is 3 mm
