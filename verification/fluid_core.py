@@ -430,16 +430,21 @@ def section_gravity(args, out: Path, runs: Path) -> None:
     write_table(out, "gravity", rows, "Gravity current head speed: the 3 x 3 matrix in two tanks, two resolutions",
                 """Head speed against 0.4 sqrt(g D drho/rho0) (Rottman & Simpson 1983). Goal: within 10 %,
 no divergence. Each depth D and density ratio in the tank whose length scales with the depth
-(0.34 D/0.06 m) at 20 rows per depth, and in the problem's own 0.34 m tank at 20 rows and at the
-problem's default spacing dx = 3 mm; every other setting is the problem's default (delta =
+(0.34 D/0.06 m) at 20 rows per depth, and in the problem's own 0.34 m tank at the problem's default
+spacing (20 rows per depth since 2026-12-04: dx = D/20) and at dx = 3 mm (the default before; 13
+rows at D = 0.04 m, 40 at 0.12 m); every other setting is the problem's default (delta =
 0.1, local shifting, linear consistency as in the recommended set, alpha = 0.01, no-slip walls,
-the lid with ClosedVolume); the rows marked alpha=0.02 run the recommended set's alpha. The
-simulated tank is the given one rounded to whole particle spacings. Pressure noise under the lid: the spread (max - min) of the top row's pressure after
+the lid with ClosedVolume); the rows marked alpha=0.02 run the recommended set's alpha. The last
+rows are the issue's deep weakly stratified case (D = 0.09 m, drho/rho0 = 0.05). The
+simulated tank is the given one rounded to whole particle spacings. Both fronts: front_speed_ratio is
+the light front's speed over the heavy head's (1 in a Boussinesq exchange under a lid; blank where
+the row was kept from a table without it). Pressure noise under the lid: the spread (max - min) of the top row's pressure after
 0.2 s, its median and largest value, and the mean top-row pressure at 0.2 s and at the end (the
 lid's pressure level, 1 rho_heavy g D at the start). largest_volume_error: the run's largest
 |geometric volume / sum M/rho - 1|.""",
                 ["case", "status", "fluid_particles", "steps", "head_speed_m_s", "reference_head_speed_m_s",
-                 "relative_error", "froude_number", "largest_volume_error", "max_clumped_pairs", "top_pressure_spread_median_pa", "top_pressure_spread_max_pa",
+                 "relative_error", "froude_number", "light_froude_number", "front_speed_ratio", "largest_volume_error",
+                 "max_clumped_pairs", "top_pressure_spread_median_pa", "top_pressure_spread_max_pa",
                  "top_pressure_spread_median_over_drho_g_d", "top_pressure_mean_start_pa", "top_pressure_mean_end_pa",
                  "max_penetration_dx", "wall_time_s", "wall_s_per_simulated_s"])
 
