@@ -181,3 +181,18 @@ def test_stratified_rest_jitter_disorders_the_lattice_the_same_way_every_time():
     same_phase = a.phase == lattice.phase
     assert same_phase.all() and (a.density[lower] > lattice.density[lower]).all()
     assert any("jitter" in msg for msg in sr.check(sr.Parameters(jitter=0.5)))
+
+
+def test_gravity_current_spacing_follows_the_depth():
+    """The default spacing is 20 rows per depth (3 mm at the default depth, exactly as the fixed
+    default before it); a spacing given is kept; the scene has that many rows."""
+    mod = load_problem("gravity_current")
+    P = mod.Parameters
+    assert mod.spacing(P()) == 0.003
+    assert mod.spacing(P(depth=0.04)) == 0.002 and mod.spacing(P(depth=0.12)) == 0.006
+    assert mod.spacing(P(depth=0.04, rows=40)) == 0.001
+    assert mod.spacing(P(depth=0.04, dx=0.003)) == 0.003
+    assert parse_overrides(P, {"depth": "0.04"}).dx == 0.0            # 0 stays the parameter; spacing() resolves it
+    for depth in (0.04, 0.06, 0.09, 0.12):
+        p = P(depth=depth)
+        assert round(mod.tank(p)[1] / mod.spacing(p)) == 20
