@@ -101,9 +101,10 @@ def gravity_cases(quick: bool) -> list[tuple[str, dict]]:
 def gravity_lid_cases(quick: bool) -> list[tuple[str, dict]]:
     """The deep weakly stratified lock exchange (``D = 0.12`` m, ``Δρ/ρ0 = 0.1``, the problem's
     0.34 m tank) that goes lopsided under the lid: the problem's defaults at 20, 40 and 60 rows,
-    then one setting changed at a time at 40 rows (the default spacing), the free surface instead
-    of the lid, and the weaker stratification ``Δρ/ρ0 = 0.03``. Every run lasts until the heavy
-    head has crossed its fit window (time scaled with ``1/sqrt(Δρ/ρ0)``)."""
+    then one setting changed at a time at 40 rows (3 mm, the default spacing before 2026-12-04),
+    the free surface instead of the lid, and the weaker stratification ``Δρ/ρ0 = 0.03``. Every
+    run lasts until the heavy head has crossed its fit window (time scaled with
+    ``1/sqrt(Δρ/ρ0)``)."""
     if quick:
         return [("lid, 5 rows", {"depth": 0.12, "rho_heavy": 1100.0, "dx": 0.024, "t_end": 0.3, "gif": False})]
     base = {"depth": 0.12, "rho_heavy": 1100.0, "gif": False}
