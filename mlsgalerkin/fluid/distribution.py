@@ -391,25 +391,26 @@ def geometric_volume(x: NDArray[np.float64], spacing: float, pixels_per_spacing:
     if x.shape[0] == 0:
         return 0.0
     pixel = spacing / int(pixels_per_spacing)
+    corner = grid_lower_corner(x, spacing, pixel)
     count = sum(int(np.count_nonzero(window)) for window, _ in _closed_windows(x, spacing, pixels_per_spacing,
-                                                                                closed_gap, tile))
+                                                                                closed_gap, tile, corner))
     return float(count) * pixel ** x.shape[1]
 
 
 def _closed_windows(x: NDArray[np.float64], spacing: float, pixels_per_spacing: int, closed_gap: float,
-                    tile: int | None):
+                    tile: int | None, origin: NDArray[np.float64]):
     """The closed union of the cells of ``x (n, d)`` as :func:`geometric_volume` builds it: yields
     ``(window, first)`` per grid, ``window`` the closed grid's ``uint8`` pixels that this grid
     counts (one grid: all of them; a tile: its own) and ``first (d,)`` the global pixel index of
-    ``window``'s first pixel (pixel ``u`` has its centre at ``corner + (u + ½) pixel``, ``corner``
-    of :func:`grid_lower_corner`). The windows do not overlap, and together they hold the union."""
+    ``window``'s first pixel (pixel ``u`` has its centre at ``origin + (u + ½) pixel``, ``origin``
+    the grid's corner ``(d,)`` (m) of :func:`grid_lower_corner`, which the caller computes once). The
+    windows do not overlap, and together they hold the union."""
     dim = x.shape[1]
     k = int(pixels_per_spacing)
     r = closing_radius(closed_gap, k)
     pixel = spacing / k
     automatic = tile is None
     tile = int(TILE_PIXELS[dim] if automatic else tile)
-    origin = grid_lower_corner(x, spacing, pixel)
     # pixel indices of each cell's first and last pixel (centres strictly inside the cell; one
     # pixel of slack either way, the rasteriser decides), widened by the closing's reach
     reach = 2 * r + 1
@@ -447,8 +448,9 @@ def _closed_pixel_centres(x: NDArray[np.float64], spacing: float, pixels_per_spa
     k = int(pixels_per_spacing)
     pixel = spacing / k
     pad = closing_radius(closed_gap, k) + 1
-    base = grid_lower_corner(x, spacing, pixel) - pad * pixel
-    for window, first in _closed_windows(x, spacing, pixels_per_spacing, closed_gap, tile):
+    corner = grid_lower_corner(x, spacing, pixel)
+    base = corner - pad * pixel
+    for window, first in _closed_windows(x, spacing, pixels_per_spacing, closed_gap, tile, corner):
         inside = np.nonzero(window.reshape(window.shape[:dim]))
         yield np.stack([base[a] + ((inside[a] + (first[a] + pad)) + 0.5) * pixel for a in range(dim)], axis=1)
 
