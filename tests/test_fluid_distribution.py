@@ -10,8 +10,10 @@ from hypothesis import strategies as st
 
 from mlsgalerkin.fluid import lattice, wall_box
 from mlsgalerkin.fluid.distribution import (
+    AT_FLOOR,
     CLOSED_GAP,
     CLUMP_DISTANCE,
+    NEIGHBOUR_CLASSES,
     PIXELS_PER_SPACING,
     cell_volumes,
     geometric_volume,
@@ -19,6 +21,7 @@ from mlsgalerkin.fluid.distribution import (
     pair_statistics,
     pair_statistics_reference,
     volume_error,
+    volume_error_by_class,
 )
 from mlsgalerkin.neighbors import find_neighbors
 
@@ -279,3 +282,30 @@ def test_a_stretched_sheet_reads_its_closed_gaps():
 
 def test_no_particles_no_shares():
     assert cell_volumes(np.zeros((0, 2)), DX).shape == (0,)
+
+
+def test_volume_error_by_class_puts_a_stretched_chain_at_the_floor():
+    """A lattice block with a chain of particles 1.4 spacings apart above it (a jet stretched at
+    ``ρ0``): the closing counts the chain's 0.4-spacing gaps, so the error is positive; the chain
+    (two neighbours each) carries it in the sheets' class, and flagged as at the floor, there too.
+    The block alone has no error in any class; no particles is refused."""
+    dx = 0.01
+    block = lattice((0.0, 0.0), (0.3, 0.1), dx) + 0.00037
+    lone = volume_error_by_class(block, np.full(len(block), dx**2), dx)
+    assert lone["volume_error"] == pytest.approx(0.0, abs=1e-12)
+    assert all(lone[name]["contribution"] == pytest.approx(0.0, abs=1e-12) for name, _, _ in NEIGHBOUR_CLASSES)
+    chain = np.c_[0.05 + 1.4 * dx * np.arange(12), np.full(12, 0.2)] + 0.00037
+    x = np.vstack([block, chain])
+    floor = np.arange(len(x)) >= len(block)
+    split = volume_error_by_class(x, np.full(len(x), dx**2), dx, at_floor=floor)
+    expected = 11 * 0.4 * dx**2 / (len(x) * dx**2)          # eleven gaps of 0.4 of a cell, closed
+    assert split["volume_error"] == pytest.approx(expected, rel=0.05)
+    assert sum(split[name]["contribution"] for name, _, _ in NEIGHBOUR_CLASSES) == pytest.approx(
+        split["volume_error"], abs=1e-12)
+    assert split["sheets and ragged surface"]["contribution"] == pytest.approx(split["volume_error"], rel=1e-9)
+    assert split[AT_FLOOR]["contribution"] == pytest.approx(split["volume_error"], rel=1e-9)
+    assert split[AT_FLOOR]["particles"] == pytest.approx(12 / len(x))
+    assert split["drops"]["particles"] == 0.0 and np.isnan(split["drops"]["excess_per_particle"])
+    with pytest.raises(ValueError, match="positive total volume"):
+        volume_error_by_class(np.zeros((0, 2)), np.zeros(0), dx)
+

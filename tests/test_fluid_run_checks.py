@@ -4,6 +4,7 @@ the one warning each past its documented limit."""
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import re
@@ -23,9 +24,10 @@ from mlsgalerkin.fluid import (
     TaitPressure,
     VolumeErrorWarning,
     Walls,
+    run_checks,
     wall_box,
 )
-from mlsgalerkin.fluid import run_checks
+from mlsgalerkin.fluid.distribution import AT_FLOOR, NEIGHBOUR_CLASSES
 from mlsgalerkin.fluid.scheme import FluidScheme
 from mlsgalerkin.scene import Scene
 from mlsgalerkin.simulation import Simulation
@@ -90,6 +92,14 @@ def test_a_compressed_block_is_warned_as_lost_volume():
     assert rep["warned"] and rep["max_abs_error"] > 0.03 and rep["time_of_max_s"] is not None
     msg = _warned(caught, VolumeErrorWarning)
     assert len(msg) == 1 and "lost" in msg[0] and "limit 1%" in msg[0]
+    # the warned (and largest) reading split by where it sits: the bulk carries the packing
+    where = rep["where_at_max"]
+    assert where["time_s"] == rep["time_of_max_s"]
+    assert where["volume_error"] == pytest.approx(-rep["max_abs_error"], rel=1e-9)
+    parts = [where[name]["contribution"] for name, _, _ in NEIGHBOUR_CLASSES]
+    assert sum(parts) == pytest.approx(where["volume_error"], abs=1e-12)
+    assert where["surface rows and bulk"]["contribution"] < 0.95 * where["volume_error"]
+    assert f"surface rows and bulk {where['surface rows and bulk']['contribution']:+.2%}" in msg[0]
 
 
 def test_clumped_pairs_are_counted_and_warned_once():
@@ -161,11 +171,35 @@ class _At:
         self.t = t
 
 
-def _volume_series(checks, times, errors) -> None:
+def _volume_series(checks, times, errors, split_now=None) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", VolumeErrorWarning)
         for t, e in zip(times, errors):
-            checks._record_volume(_At(float(t)), float(e))
+            checks._record_volume(_At(float(t)), float(e), None if split_now is None else split_now(float(t), float(e)))
+
+
+def test_the_largest_readings_are_split_from_half_a_percent_in_steps():
+    """An error rising to 2 % and falling back: readings are split from 0.5 % on, each at least a
+    step past the last split, and the warned one (past 1 %); none while it falls."""
+    errors = np.r_[np.linspace(0.0, 0.02, 401), np.linspace(0.02, 0.0, 101)[1:]]
+    times = 0.001 * np.arange(errors.size)
+    split = []
+
+    def split_now(t, e):
+        def where():
+            split.append(e)
+            return {"time_s": t, "volume_error": e}
+        return where
+
+    a = run_checks.FluidRunChecks()
+    _volume_series(a, times, errors, split_now)
+    step, start = run_checks.VOLUME_ATTRIBUTION_STEP, run_checks.VOLUME_ATTRIBUTION_FROM
+    assert min(split) >= start and np.all(np.diff(split) > 0)
+    warned = errors[errors > run_checks.VOLUME_ERROR_LIMIT][0]
+    assert warned in split
+    assert all(later - earlier >= step - 1e-15 for earlier, later in itertools.pairwise(split) if later != warned)
+    assert len(split) <= (0.02 - start) / step + 2
+    assert a.volume["where_at_max"]["volume_error"] == split[-1] >= 0.02 - step
 
 
 def test_the_running_mean_sees_past_one_scattered_reading():
@@ -200,3 +234,24 @@ def test_the_running_mean_survives_a_restart():
     second.load_state_dict(json.loads(json.dumps(first.state_dict())))   # as a checkpoint stores it
     _volume_series(second, times[91:], errors[91:])
     assert second.volume == whole.volume
+
+
+def test_a_gain_at_the_cavitation_floor_is_named_in_the_warning():
+    """A gain that the particles at p ≤ 0 carry: the warning says where it sits and does not
+    advise cavitation (the run has it); a gain in the bulk keeps the general advice."""
+    def split(floor):
+        return lambda: {"time_s": 0.3, "volume_error": 0.012, "drops": {"particles": 0.0, "contribution": 0.0},
+                        "sheets and ragged surface": {"particles": 0.2, "contribution": 0.011},
+                        "surface rows and bulk": {"particles": 0.8, "contribution": 0.001},
+                        AT_FLOOR: {"particles": 0.25, "contribution": floor}}
+    for floor, expected, absent in ((0.015, "Most of it sits at the cavitation floor", "Try cavitation"),
+                                    (0.001, "Try cavitation", "Most of it sits")):
+        checks = run_checks.FluidRunChecks()
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            checks._record_volume(_At(0.3), 0.012, split(floor))
+        msg = _warned(caught, VolumeErrorWarning)
+        assert len(msg) == 1 and expected in msg[0] and absent not in msg[0]
+        assert f"sheets and ragged surface +1.10%, surface rows and bulk +0.10%; {AT_FLOOR} (p ≤ 0) {floor:+.2%}" in msg[0]
+        assert checks.volume["where_at_max"]["volume_error"] == 0.012
+

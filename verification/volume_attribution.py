@@ -33,9 +33,15 @@ import time
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial import cKDTree
 
-from mlsgalerkin.fluid.distribution import NEIGHBOURHOOD_REACH, cell_volumes, neighbourhood_excess
+from mlsgalerkin.fluid.distribution import (
+    AT_FLOOR,
+    NEIGHBOUR_CLASSES,
+    NEIGHBOURHOOD_REACH,
+    cell_volumes,
+    neighbourhood_excess,
+    volume_error_by_class,
+)
 from mlsgalerkin.io import atomic_write, csv_text, format_cell, provenance, read_pvd, read_vtu
 from mlsgalerkin.io.checkpoint import latest_checkpoint, load_checkpoint
 
@@ -50,11 +56,11 @@ RUNS = (
     ("beam_on_spring 15 mm (default)", "beam_on_spring_dx_15mm", 0.59),
     ("beam_on_spring 7.5 mm", "beam_on_spring_dx_7.5mm", 0.59),
 )
-#: Neighbour counts within :data:`REACH` spacings of each class (inclusive bounds).
-CLASSES = (("drops", 0, 0), ("sheets and ragged surface", 1, 4), ("surface rows and bulk", 5, 10**6))
+#: Neighbour counts within :data:`REACH` spacings of each class (inclusive bounds): the package's.
+CLASSES = NEIGHBOUR_CLASSES
 REACH = NEIGHBOURHOOD_REACH
 #: The particles at the cavitation floor (``p ≤ 0``): their density is ``ρ0`` and cannot fall.
-FLOOR = "at the cavitation floor"
+FLOOR = AT_FLOOR
 #: The settled state: the frames of the run's last this many seconds.
 SETTLED = 1.0
 
@@ -65,21 +71,16 @@ def frame_attribution(x: np.ndarray, volume: np.ndarray, spacing: float,
     it (fractions). ``x (n, d)`` fluid positions (m), ``volume (n,)`` their ``M/ρ`` (m^d),
     ``shares (n,)`` their :func:`cell_volumes` (m^d; computed when not given). With ``floor``
     (bool ``(n,)``: the particles at the cavitation floor, ``p ≤ 0``), also the share and the
-    contribution of those: no density relaxation can give them volume."""
-    if shares is None:
-        shares = cell_volumes(x, spacing)
-    neighbours = cKDTree(x).query_ball_point(x, REACH * spacing, return_length=True) - 1
-    total = float(volume.sum())
-    row = {"volume_error": float(shares.sum()) / total - 1.0}
-    for name, lo, hi in CLASSES:
-        inside = (neighbours >= lo) & (neighbours <= hi)
-        row[f"{name}: particles"] = float(inside.mean())
-        row[f"{name}: contribution"] = float((shares[inside] - volume[inside]).sum()) / total
-        row[f"{name}: excess per particle"] = (float(((shares[inside] - volume[inside]) / volume[inside]).mean())
-                                               if inside.any() else float("nan"))
+    contribution of those: no density relaxation can give them volume
+    (:func:`~mlsgalerkin.fluid.distribution.volume_error_by_class`, flattened into the table's columns)."""
+    split = volume_error_by_class(x, volume, spacing, at_floor=floor, shares=shares)
+    row = {"volume_error": split["volume_error"]}
+    for name, _, _ in CLASSES:
+        for what in ("particles", "contribution", "excess_per_particle"):
+            row[f"{name}: {what.replace('_', ' ')}"] = split[name][what]
     if floor is not None:
-        row[f"{FLOOR}: particles"] = float(floor.mean())
-        row[f"{FLOOR}: contribution"] = float((shares[floor] - volume[floor]).sum()) / total
+        row[f"{FLOOR}: particles"] = split[FLOOR]["particles"]
+        row[f"{FLOOR}: contribution"] = split[FLOOR]["contribution"]
     return row
 
 

@@ -36,8 +36,24 @@ the run back to Ma = 0.1. The geometric volume is the fluid's own measure of spa
 (:mod:`mlsgalerkin.fluid.distribution`): a fluid whose particles pack tighter than their
 volumes ``M/ρ`` say loses volume that the density does not show. The summary keeps the largest
 ``|volume_error|`` and when, the largest ``|mean|`` of the errors over :data:`VOLUME_MEAN_WINDOW`
-(50 ms; ``max_abs_mean_error``) and when, the smallest pair distance and when, the most clumped pairs and
-when, the largest Mach number and when, and the fallback shares.
+(50 ms; ``max_abs_mean_error``) and when, where the largest reading sits (``where_at_max``, below),
+the smallest pair distance and when, the most clumped pairs and when, the largest Mach number and
+when, and the fallback shares.
+
+**Where a volume error sits.** From :data:`VOLUME_ATTRIBUTION_FROM` (0.5 %) on, a new largest
+reading at least :data:`VOLUME_ATTRIBUTION_STEP` past the last one split, and the reading that is
+warned about, are split by :func:`~mlsgalerkin.fluid.distribution.volume_error_by_class`: each
+particle's share of the geometric volume against its ``M/ρ``, summed over the drops (no other
+particle within 1.5 spacings), the sheets and ragged surface (1–4) and the surface rows and bulk (5
+or more), and across them over the particles at ``p ≤ 0`` (the cavitation floor, where no density
+relaxation can give a particle volume). A lost volume in the bulk is a packing (pairing, a
+collapse); a gain in the sheets and at the floor is a jet or a sheet stretched at ``ρ0``
+(``docs/theory/stabilisation.md`` §10). The warning names the split, and ``where_at_max`` keeps
+the last one (``time_s``, ``volume_error``, per class its share of the particles and its
+``contribution``; the contributions of the three neighbour classes add up to the error): at the
+run's largest reading to within :data:`VOLUME_ATTRIBUTION_STEP`. Each split costs one
+:func:`~mlsgalerkin.fluid.distribution.cell_volumes` (14 ms at 1 250 particles in 2D); a run with a
+largest error of 2 % pays at most 31.
 
 All of it is part of a checkpoint (:meth:`FluidRunChecks.state_dict`): a restarted run reports
 the same extremes as an uninterrupted one.
@@ -48,11 +64,18 @@ from __future__ import annotations
 import math
 import time
 import warnings
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
-from mlsgalerkin.fluid.distribution import CLUMP_DISTANCE, pair_statistics, volume_error
+from mlsgalerkin.fluid.distribution import (
+    AT_FLOOR,
+    CLUMP_DISTANCE,
+    pair_statistics,
+    volume_error,
+    volume_error_by_class,
+)
 from mlsgalerkin.fluid.domain_exit import still_in_run
 from mlsgalerkin.fluid.eos import MachNumberWarning
 from mlsgalerkin.fluid.state import FluidState
@@ -62,13 +85,15 @@ __all__ = [
     "DISTRIBUTION_EVERY_STEPS",
     "FALLBACK_MIN_EVALUATIONS",
     "FALLBACK_POINT_SHARE_LIMIT",
-    "FluidRunChecks",
     "MACH_LIMIT",
     "MACH_TARGET",
-    "ParticleClumpingWarning",
-    "ShapeFunctionFallbackWarning",
+    "VOLUME_ATTRIBUTION_FROM",
+    "VOLUME_ATTRIBUTION_STEP",
     "VOLUME_ERROR_LIMIT",
     "VOLUME_MEAN_WINDOW",
+    "FluidRunChecks",
+    "ParticleClumpingWarning",
+    "ShapeFunctionFallbackWarning",
     "VolumeErrorWarning",
 ]
 
@@ -80,6 +105,13 @@ VOLUME_ERROR_LIMIT = 0.01
 #: largest single reading of a long run sits that scatter's two or three standard deviations
 #: above what the water does; the mean over 50 ms does not.
 VOLUME_MEAN_WINDOW = 0.05
+#: From this ``|volume_error|`` on, a new largest reading is split by where it sits
+#: (:func:`~mlsgalerkin.fluid.distribution.volume_error_by_class`; ``where_at_max`` in the summary) ...
+VOLUME_ATTRIBUTION_FROM = 0.005
+#: ... when it is at least this much past the reading split last (so a run splits at most
+#: ``(largest − FROM)/STEP + 1`` readings, each one :func:`~mlsgalerkin.fluid.distribution.cell_volumes`),
+#: and always at the reading that is warned about.
+VOLUME_ATTRIBUTION_STEP = 0.0005
 #: More clumped pairs (closer than ``CLUMP_DISTANCE`` spacings) than this are warned about.
 CLUMPED_PAIRS_LIMIT = 0
 #: The Mach number ``max|v|/c0`` the sound speed is chosen for (``c0 = 10 u_max``).
@@ -122,7 +154,7 @@ class FluidRunChecks:
         self.volume = {"max_abs_error": 0.0, "time_of_max_s": None, "error_at_start": None, "error_last": None,
                        "time_of_last_s": None, "warned": False, "max_abs_mean_error": None,
                        "time_of_max_mean_s": None, "mean_window_s": VOLUME_MEAN_WINDOW,
-                       "time_first_s": None}
+                       "time_first_s": None, "where_at_max": None}
         self.recent_volume: list[tuple[float, float]] = []   # (t, error) of the last VOLUME_MEAN_WINDOW
         self.pairs = {"min_pair_distance_dx": math.inf, "time_of_min_s": None, "max_clumped_pairs": 0,
                       "time_of_max_clumped_s": None, "min_wall_distance_dx": math.inf, "warned": False}
@@ -154,7 +186,7 @@ class FluidRunChecks:
             vgeo, err = volume_error(s.x[f], s.M[f], s.rho[f], s.spacing, inside)
             out["geometric_volume"] = vgeo
             out["volume_error"] = err
-            self._record_volume(s, err)
+            self._record_volume(s, err, lambda: self.where(s, inside))
         if s.neighbors is not None and s.n_fluid:
             nb = s.neighbors
             ps = pair_statistics(nb.indptr, nb.indices, s.x, s.n_fluid, s.spacing, period=s.period)
@@ -164,15 +196,24 @@ class FluidRunChecks:
             self._record_pairs(s, ps)
         return out
 
-    def _record_volume(self, s: FluidState, err: float) -> None:
+    def _record_volume(self, s: FluidState, err: float, split_now: Callable[[], dict[str, Any]] | None = None) -> None:
+        """Records a reading ``err`` at ``s.t``; ``split_now()`` gives where it sits (:meth:`where`),
+        called when the reading is to be split (module docstring; never without it)."""
         rec = self.volume
         if rec["error_at_start"] is None:
             rec["error_at_start"] = err
         rec["error_last"], rec["time_of_last_s"] = err, s.t
-        if abs(err) > rec["max_abs_error"]:
+        largest = abs(err) > rec["max_abs_error"]
+        if largest:
             rec["max_abs_error"], rec["time_of_max_s"] = abs(err), s.t
         self._record_mean(s.t, err)
-        if abs(err) > VOLUME_ERROR_LIMIT and not rec["warned"]:
+        warn = abs(err) > VOLUME_ERROR_LIMIT and not rec["warned"]
+        split = rec["where_at_max"]
+        if split_now is not None and (warn or (
+                largest and abs(err) >= VOLUME_ATTRIBUTION_FROM
+                and (split is None or abs(err) >= abs(split["volume_error"]) + VOLUME_ATTRIBUTION_STEP))):
+            rec["where_at_max"] = split = split_now()
+        if warn:
             rec["warned"] = True
             if err < 0:
                 what = ("lost", "tighter", "pairing, clumping or a collapsing column",
@@ -180,12 +221,39 @@ class FluidRunChecks:
             else:
                 what = ("gained", "looser", "voids, a spray of isolated particles or a fluid under tension",
                         "cavitation (TaitPressure(negative_pressure='cavitate')) or particle shifting")
+            where, advice = "not split", f"Try {what[3]}"
+            if split is not None:
+                classes = [name for name in split if name not in ("time_s", "volume_error", AT_FLOOR)]
+                where = ", ".join(f"{name} {split[name]['contribution']:+.2%}" for name in classes)
+                if AT_FLOOR in split:
+                    where += f"; {AT_FLOOR} (p ≤ 0) {split[AT_FLOOR]['contribution']:+.2%}"
+                    if err > 0 and split[AT_FLOOR]["contribution"] >= 0.5 * err:
+                        advice = ("Most of it sits at the cavitation floor, where the density cannot fall: a jet or a "
+                                  "sheet stretching at ρ0, which neither more cavitation nor a finer resolution "
+                                  "removes (docs/theory/stabilisation.md §10)")
             warnings.warn(
                 f"at t = {s.t:.6g} s the fluid has {what[0]} {abs(err):.2%} of its volume: its geometric volume (the "
                 f"closed union of the particles' cells) is {err:+.2%} off the volume Σ M/ρ its masses and densities "
                 f"say (limit {VOLUME_ERROR_LIMIT:.0%}). The particles fill space {what[1]} than their density says "
-                f"({what[2]}). Try {what[3]}; the columns geometric_volume and volume_error of "
-                "timeseries.csv follow it", VolumeErrorWarning, stacklevel=3)
+                f"({what[2]}). Where it sits (each class's part of the error, the classes by the other particles "
+                f"within 1.5 spacings): {where}. {advice}; the columns geometric_volume "
+                "and volume_error of timeseries.csv follow it, and summary.json's run_checks.volume.where_at_max "
+                "splits its largest reading", VolumeErrorWarning, stacklevel=3)
+
+    @staticmethod
+    def where(s: FluidState, inside: np.ndarray) -> dict[str, Any]:
+        """The current volume error split by where it sits
+        (:func:`~mlsgalerkin.fluid.distribution.volume_error_by_class` over the fluid particles
+        still in the run, ``inside``, with those at ``p ≤ 0`` as the floor's class): ``time_s``,
+        ``volume_error`` and, per class, its share of the particles and its contribution (they add
+        up to the error)."""
+        f = s.fluid
+        x, volume = s.x[f][inside], (s.M[f] / s.rho[f])[inside]
+        split = volume_error_by_class(x, volume, s.spacing, at_floor=(s.p[f] <= 0.0)[inside])
+        out: dict[str, Any] = {"time_s": s.t, "volume_error": split.pop("volume_error")}
+        for name, entry in split.items():
+            out[name] = {"particles": entry["particles"], "contribution": entry["contribution"]}
+        return out
 
     def _record_mean(self, t: float, err: float) -> None:
         """The largest ``|mean|`` of the errors evaluated in a window of :data:`VOLUME_MEAN_WINDOW`
