@@ -201,3 +201,81 @@ def test_a_disordered_two_layer_tank_at_rest_is_in_balance_at_its_first_evaluati
     lc = next(e for e in sim.solvers[0].effects if isinstance(e, LinearConsistentPressure))
     assert lc.faces == 0 and lc.corrected_share == 1.0     # no surface under the lid; every node corrected
     assert a.max() < 0.02                                   # measured 0.0044 g (5.7 g before)
+
+
+def test_the_hydrostatic_reference_kernel_agrees_with_the_numpy_reference():
+    from mlsgalerkin.fluid.linear_consistency import (
+        hydrostatic_reference,
+        hydrostatic_reference_force,
+        hydrostatic_reference_force_reference,
+    )
+    from mlsgalerkin.kernels import get_kernel
+    s = tank_with_the_correction(steps=3, jitter=0.2)
+    s.table = evaluate_shape_functions(s.x, s.x, s.h, s.neighbors, get_kernel("cubic_spline"), 1,
+                                       kernel_sum_volumes=s.volume)
+    ref = hydrostatic_reference(s, 0.2)
+    assert ref["slope"] == pytest.approx([0.0, -RHO * G], rel=1e-12)     # rho_ref g, the water's own
+    p = s.p[: s.n_fluid]
+    assert ref["a"] < float(np.average(p - (s.x[: s.n_fluid] - ref["centroid"]) @ ref["slope"],
+                                       weights=s.volume[: s.n_fluid])) - 0.19 * np.ptp(p)
+    corrected = np.random.default_rng(5).random(s.n_fluid) < 0.5
+    f1 = hydrostatic_reference_force(s, ref, corrected)
+    f2 = hydrostatic_reference_force_reference(s, ref, corrected)
+    scale = np.abs(f2).max()
+    assert scale > 0 and np.all(f1[corrected] == 0.0)
+    np.testing.assert_allclose(f1, f2, rtol=0, atol=1e-10 * scale)
+
+
+def _closed_rest(reference: bool, steps: int, jitter: float = 0.0):
+    from mlsgalerkin.problems import stratified_rest as sr
+
+    sim = Simulation(sr.make_scene(sr.Parameters(jitter=jitter, t_end=1.0)))
+    lc = next(e for e in sim.solvers[0].effects if isinstance(e, LinearConsistentPressure))
+    lc.hydrostatic_reference = reference
+    sim.run(max_steps=steps, progress=False)
+    return sim.state.fluid, lc
+
+
+def test_the_hydrostatic_reference_leaves_a_closed_tank_at_rest_as_it_was():
+    """Under the lid, from a lattice, no node falls back: the reference is fixed at the first
+    evaluation, never applied, and the run is the same bit for bit; its state survives a
+    checkpoint's JSON to the bit."""
+    import json
+
+    plain, _ = _closed_rest(False, 30)
+    with_ref, lc = _closed_rest(True, 30)
+    assert lc.reference is not None and lc.reference_evaluations == 0
+    assert np.array_equal(plain.x, with_ref.x) and np.array_equal(plain.rho, with_ref.rho)
+    again = LinearConsistentPressure(hydrostatic_reference=True)
+    again.load_state_dict(json.loads(json.dumps(lc.state_dict())))
+    assert again.reference == lc.reference and again.reference_evaluations == 0
+    assert lc.summary()["hydrostatic_reference"]["reference"]["rho_ref"] > 1000.0   # the two layers' mean
+
+
+def test_the_hydrostatic_reference_acts_only_at_the_nodes_that_fall_back():
+    """A disordered closed tank whose pressure is made to jump at every seventh particle: where
+    nodes fall back, the reference's force is added there and nowhere else."""
+    from mlsgalerkin.fluid.linear_consistency import (
+        hydrostatic_reference_force,
+        linear_consistency_force,
+    )
+
+    s, lc = _closed_rest(True, 1, jitter=0.25)
+    s.p[: s.n_fluid: 7] += 300.0          # a pressure that is not linear over those rows
+    _, ok, faces = linear_consistency_force(s)
+    assert faces == 0 and not ok.all()
+    df = hydrostatic_reference_force(s, lc.reference, ok)
+    assert np.all(df[ok] == 0.0) and np.abs(df[~ok]).max() > 0.0
+
+
+@pytest.mark.parametrize("kw, message", [({"reference_background": -0.1}, "reference_background"),
+                                         ({"hydrostatic_reference": "yes"}, "hydrostatic_reference")])
+def test_the_hydrostatic_reference_refuses_bad_input(kw, message):
+    from mlsgalerkin.problems import stratified_rest as sr
+
+    scene = sr.make_scene(sr.Parameters(t_end=0.01))
+    lc = next(e for sch in scene.schemes for e in sch.effects if isinstance(e, LinearConsistentPressure))
+    for key, value in kw.items():
+        setattr(lc, key, value)
+    with pytest.raises(ValueError, match=message):
+        Simulation(scene)
