@@ -72,6 +72,7 @@ import numpy as np
 from mlsgalerkin.fluid.distribution import (
     AT_FLOOR,
     CLUMP_DISTANCE,
+    NEIGHBOUR_CLASSES,
     pair_statistics,
     volume_error,
     volume_error_by_class,
@@ -186,7 +187,7 @@ class FluidRunChecks:
             vgeo, err = volume_error(s.x[f], s.M[f], s.rho[f], s.spacing, inside)
             out["geometric_volume"] = vgeo
             out["volume_error"] = err
-            self._record_volume(s, err, lambda: self.where(s, inside))
+            self._record_volume(s, err, lambda: self.volume_split(s, inside))
         if s.neighbors is not None and s.n_fluid:
             nb = s.neighbors
             ps = pair_statistics(nb.indptr, nb.indices, s.x, s.n_fluid, s.spacing, period=s.period)
@@ -197,7 +198,7 @@ class FluidRunChecks:
         return out
 
     def _record_volume(self, s: FluidState, err: float, split_now: Callable[[], dict[str, Any]] | None = None) -> None:
-        """Records a reading ``err`` at ``s.t``; ``split_now()`` gives where it sits (:meth:`where`),
+        """Records a reading ``err`` at ``s.t``; ``split_now()`` gives where it sits (:meth:`volume_split`),
         called when the reading is to be split (module docstring; never without it)."""
         rec = self.volume
         if rec["error_at_start"] is None:
@@ -223,8 +224,8 @@ class FluidRunChecks:
                         "cavitation (TaitPressure(negative_pressure='cavitate')) or particle shifting")
             where, advice = "not split", f"Try {what[3]}"
             if split is not None:
-                classes = [name for name in split if name not in ("time_s", "volume_error", AT_FLOOR)]
-                where = ", ".join(f"{name} {split[name]['contribution']:+.2%}" for name in classes)
+                where = ", ".join(f"{name} {split[name]['contribution']:+.2%}" for name, _, _ in NEIGHBOUR_CLASSES
+                                  if name in split)
                 if AT_FLOOR in split:
                     where += f"; {AT_FLOOR} (p ≤ 0) {split[AT_FLOOR]['contribution']:+.2%}"
                     if err > 0 and split[AT_FLOOR]["contribution"] >= 0.5 * err:
@@ -241,7 +242,7 @@ class FluidRunChecks:
                 "splits its largest reading", VolumeErrorWarning, stacklevel=3)
 
     @staticmethod
-    def where(s: FluidState, inside: np.ndarray) -> dict[str, Any]:
+    def volume_split(s: FluidState, inside: np.ndarray) -> dict[str, Any]:
         """The current volume error split by where it sits
         (:func:`~mlsgalerkin.fluid.distribution.volume_error_by_class` over the fluid particles
         still in the run, ``inside``, with those at ``p ≤ 0`` as the floor's class): ``time_s``,
