@@ -147,6 +147,7 @@ class Parameters:
     density_filter: int = RECOMMENDED.density_filter  #: Shepard density filter every this many steps; 0 drops it (–)
     consistent_integration: bool = RECOMMENDED.consistent_integration  #: nodal integration that meets the integration constraint (VCI) (bool)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    hydrostatic_reference: bool = RECOMMENDED.hydrostatic_reference  #: with the linear consistency, under a lid: a fixed hydrostatic field integrated exactly where the fit falls back (bool)
     volume_consistency: float = RECOMMENDED.volume_consistency  #: the density relaxed towards the particles' packing at rate ε where the fluid has a free surface (0: off) (–)
     penalty_walls: bool = True     #: the tank's inner surface as a penalty-contact backstop (bool)
     negative_pressure: str = "allow"  #: tension treatment: allow, clamp or cavitate (choice)
@@ -215,6 +216,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                    shifting=p.shifting, density_filter=p.density_filter, negative_pressure=p.negative_pressure,
                    penalty_thickness=0.25 * dx if p.penalty_walls else None,
                    consistent_integration=p.consistent_integration, linear_consistency=p.linear_consistency,
+                   hydrostatic_reference=p.hydrostatic_reference,
                    volume_consistency=p.volume_consistency,
                    spacing=dx, h_factor=p.h_factor,
                    extra=[ClosedVolume()] if p.lid and p.closed_volume else [])

@@ -94,6 +94,7 @@ class Parameters:
     negative_pressure: str = "allow"  #: tension treatment: allow, clamp, cavitate or free_surface (choice)
     consistent_integration: bool = RECOMMENDED.consistent_integration  #: nodal integration that meets the integration constraint (VCI) (bool)
     linear_consistency: bool = RECOMMENDED.linear_consistency  #: the pressure's linear fit integrated exactly, with the free-surface term (bool)
+    hydrostatic_reference: bool = RECOMMENDED.hydrostatic_reference  #: with the linear consistency, under a lid: a fixed hydrostatic field integrated exactly where the fit falls back (bool)
     volume_consistency: float = RECOMMENDED.volume_consistency  #: the density relaxed towards the particles' packing at rate ε where the fluid has a free surface (0: off) (–)
     lid: bool = True               #: rigid lid on top; false: a free surface (bool)
     closed_volume: bool = True     #: with the lid: hold the closed tank's volume in the continuity equation (ClosedVolume) (bool)
@@ -152,6 +153,7 @@ def make_scene(p: Parameters = Parameters()) -> Scene:
                    residual_viscosity=p.residual_viscosity, delta=p.delta, shifting=p.shifting,
                    density_filter=p.density_filter, negative_pressure=p.negative_pressure,
                    consistent_integration=p.consistent_integration, linear_consistency=p.linear_consistency,
+                   hydrostatic_reference=p.hydrostatic_reference,
                    volume_consistency=p.volume_consistency,
                    spacing=p.dx, h_factor=p.h_factor,
                    extra=[ClosedVolume()] if p.lid and p.closed_volume else [])

@@ -54,6 +54,7 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
           penalty_thickness: float | None = None,
           consistent_integration: bool = RECOMMENDED.consistent_integration,
           linear_consistency: bool = RECOMMENDED.linear_consistency,
+          hydrostatic_reference: bool = RECOMMENDED.hydrostatic_reference,
           volume_consistency: float = RECOMMENDED.volume_consistency, loose_band: float | None = None,
           droplet_rate: float = RECOMMENDED.droplet_rate, loose_local: float = RECOMMENDED.loose_local,
           spacing: float | None = None,
@@ -68,8 +69,10 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     :func:`~mlsgalerkin.fluid.stabilisation.stabilisation` of ``delta``, ``shifting``,
     ``density_filter``, ``negative_pressure``, ``penalty_thickness`` (m; the tank's penalty surface
     as a backstop, reaching one ``spacing``) and ``consistent_integration``;
-    ``LinearConsistentPressure()`` if ``linear_consistency`` (the pressure's local linear fit
-    integrated exactly, with the free-surface boundary term); ``VolumeConsistency(volume_consistency)``
+    ``LinearConsistentPressure(hydrostatic_reference=hydrostatic_reference)`` if ``linear_consistency``
+    (the pressure's local linear fit integrated exactly, with the free-surface boundary term; in a
+    closed tank with ``hydrostatic_reference`` a fixed hydrostatic field integrated exactly where
+    the fit falls back); ``VolumeConsistency(volume_consistency)``
     unless ``volume_consistency`` is 0 (the density relaxed towards the particles' packing where the
     fluid has a free surface, ``docs/theory/stabilisation.md`` §10), with its loose side past the
     volume error ``loose_band`` (``None``, the default: :data:`RECOMMENDED`'s 0.005 when the volume
@@ -115,8 +118,12 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     effects += stabilisation(delta=delta, shifting=shifting, density_filter=density_filter,
                              negative_pressure=negative_pressure, penalty_thickness=penalty_thickness,
                              spacing=spacing, consistent_integration=consistent_integration)
+    if hydrostatic_reference and not linear_consistency:
+        raise ValueError("water(hydrostatic_reference=True) is part of the linear consistency, which "
+                         "linear_consistency=False leaves out: give linear_consistency=True (the default) "
+                         "or hydrostatic_reference=False")
     if linear_consistency:
-        effects.append(LinearConsistentPressure())
+        effects.append(LinearConsistentPressure(hydrostatic_reference=hydrostatic_reference))
     if volume_consistency != 0:     # a negative rate is listed, so the effect's check refuses it
         effects.append(VolumeConsistency(volume_consistency, loose_band=loose_band, droplet_rate=droplet_rate,
                                          loose_local=loose_local))

@@ -46,7 +46,10 @@ class StabilisationSet:
     reported with the Reynolds number it implies), ``delta`` the δ-SPH density diffusion (–),
     ``shifting`` one of ``"local"``, ``"design"``, ``"off"``, ``density_filter`` a Shepard
     filter every this many steps (0: none), ``consistent_integration`` the constant-only VCI,
-    ``linear_consistency`` the pressure's linear fit integrated exactly, ``volume_consistency``
+    ``linear_consistency`` the pressure's linear fit integrated exactly, ``hydrostatic_reference``
+    with it, in a closed tank, a fixed hydrostatic field integrated exactly at the nodes that fall
+    back (:class:`~mlsgalerkin.fluid.linear_consistency.LinearConsistentPressure`; off until every
+    closed-tank table has been rerun with it), ``volume_consistency``
     the rate ε at which the density relaxes towards the particles' packing where the fluid has a
     free surface (–; 0: off; :class:`~mlsgalerkin.fluid.volume_consistency.VolumeConsistency`),
     ``loose_band`` its loose side: past this volume error of the whole fluid (geometric volume over
@@ -64,6 +67,7 @@ class StabilisationSet:
     density_filter: int = 0
     consistent_integration: bool = False
     linear_consistency: bool = True
+    hydrostatic_reference: bool = False
     volume_consistency: float = 0.02
     loose_band: float = 0.005
     loose_local: float = 2.0
@@ -82,9 +86,10 @@ RECOMMENDED = StabilisationSet()
 def recommended_stabilisation() -> list[Effect]:
     """The stabilising effects of :data:`RECOMMENDED`, in the order :func:`water` lists them:
     ``MonaghanViscosity(α)``, ``DensityDiffusion(δ)``, ``ParticleShifting("local")``,
-    ``LinearConsistentPressure()``, ``VolumeConsistency(ε, loose_band=e_0, droplet_rate=r_d, loose_local=w)``."""
+    ``LinearConsistentPressure(hydrostatic_reference=…)``, ``VolumeConsistency(ε, loose_band=e_0, droplet_rate=r_d, loose_local=w)``."""
     return [MonaghanViscosity(RECOMMENDED.alpha), DensityDiffusion(RECOMMENDED.delta),
-            ParticleShifting(RECOMMENDED.shifting), LinearConsistentPressure(),
+            ParticleShifting(RECOMMENDED.shifting),
+            LinearConsistentPressure(hydrostatic_reference=RECOMMENDED.hydrostatic_reference),
             VolumeConsistency(RECOMMENDED.volume_consistency, loose_band=RECOMMENDED.loose_band,
                               droplet_rate=RECOMMENDED.droplet_rate, loose_local=RECOMMENDED.loose_local)]
 
