@@ -281,11 +281,11 @@ def test_the_hydrostatic_reference_refuses_bad_input(kw, message):
         Simulation(scene)
 
 
-def test_water_refuses_the_hydrostatic_reference_without_the_linear_consistency():
+def test_the_hydrostatic_reference_goes_with_the_linear_consistency():
     from mlsgalerkin.fluid.presets import water
 
-    with pytest.raises(ValueError, match="linear_consistency=True"):
-        water(20.0, spacing=0.01, linear_consistency=False, hydrostatic_reference=True)
+    assert not [e for e in water(20.0, spacing=0.01, linear_consistency=False, hydrostatic_reference=True).effects
+                if isinstance(e, LinearConsistentPressure)]
     lc = [e for e in water(20.0, spacing=0.01, hydrostatic_reference=True).effects
           if isinstance(e, LinearConsistentPressure)]
     assert len(lc) == 1 and lc[0].hydrostatic_reference is True

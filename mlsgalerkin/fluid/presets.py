@@ -72,7 +72,8 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     ``LinearConsistentPressure(hydrostatic_reference=hydrostatic_reference)`` if ``linear_consistency``
     (the pressure's local linear fit integrated exactly, with the free-surface boundary term; in a
     closed tank with ``hydrostatic_reference`` a fixed hydrostatic field integrated exactly where
-    the fit falls back); ``VolumeConsistency(volume_consistency)``
+    the fit falls back; it is part of the linear consistency, so ``linear_consistency=False``
+    leaves it out too); ``VolumeConsistency(volume_consistency)``
     unless ``volume_consistency`` is 0 (the density relaxed towards the particles' packing where the
     fluid has a free surface, ``docs/theory/stabilisation.md`` §10), with its loose side past the
     volume error ``loose_band`` (``None``, the default: :data:`RECOMMENDED`'s 0.005 when the volume
@@ -118,10 +119,6 @@ def water(c0: float, *, u_max: float | None = None, gravity: Sequence[float] | N
     effects += stabilisation(delta=delta, shifting=shifting, density_filter=density_filter,
                              negative_pressure=negative_pressure, penalty_thickness=penalty_thickness,
                              spacing=spacing, consistent_integration=consistent_integration)
-    if hydrostatic_reference and not linear_consistency:
-        raise ValueError("water(hydrostatic_reference=True) is part of the linear consistency, which "
-                         "linear_consistency=False leaves out: give linear_consistency=True (the default) "
-                         "or hydrostatic_reference=False")
     if linear_consistency:
         effects.append(LinearConsistentPressure(hydrostatic_reference=hydrostatic_reference))
     if volume_consistency != 0:     # a negative rate is listed, so the effect's check refuses it
