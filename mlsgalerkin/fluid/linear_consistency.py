@@ -429,7 +429,7 @@ class LinearConsistentPressure(Effect):
     reads = ("shape_functions", "volume", "kernel_sum")
 
     def __init__(self, *, surface: float = 0.85, c_min: float = 0.75, linear_tol: float = 0.5,
-                 hydrostatic_reference: bool = False, reference_background: float = 0.15) -> None:
+                 hydrostatic_reference: bool = True, reference_background: float = 0.15) -> None:
         self.surface, self.c_min, self.linear_tol = float(surface), float(c_min), float(linear_tol)
         self.hydrostatic_reference = hydrostatic_reference
         self.reference_background = reference_background

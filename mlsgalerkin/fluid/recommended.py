@@ -67,7 +67,7 @@ class StabilisationSet:
     density_filter: int = 0
     consistent_integration: bool = False
     linear_consistency: bool = True
-    hydrostatic_reference: bool = False
+    hydrostatic_reference: bool = True
     volume_consistency: float = 0.02
     loose_band: float = 0.005
     loose_local: float = 2.0
