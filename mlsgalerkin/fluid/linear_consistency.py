@@ -84,9 +84,9 @@ remove it is a nodal integration that is linearly exact and conserves energy at 
 prototype of one (``docs/theory/stabilisation.md`` §7) runs the fronts alike (0.99) but leaves
 the pairing modes of nodal integration unresisted.
 
-**A fixed hydrostatic reference in a closed tank** (``hydrostatic_reference=True``; off by
-default, measured on prototypes, ``docs/theory/stabilisation.md`` §7, the eighth candidate). Where
-a node falls back to DNI, DNI's error scales with the whole pressure, most of which under a lid is
+**A fixed hydrostatic reference in a closed tank** (``hydrostatic_reference=True``, the default
+since 2026-12-05 and part of the recommended set; ``docs/theory/stabilisation.md`` §7, the eighth
+candidate). Where a node falls back to DNI, DNI's error scales with the whole pressure, most of which under a lid is
 hydrostatic. In an evaluation without a free-surface face and with gravity, a field of position
 fixed at the first such evaluation,
 
@@ -109,12 +109,13 @@ mean density leaves a residual of about ``±Δρ g D/2`` at the floor of a lock 
 the range at ``Δρ/ρ0 = 1``, so the offset below the mean is 0.19 of the range at ``Δρ/ρ0 = 0.1``
 and 0.4 at 1 (with a fixed 0.2 below the mean, the strong stratifications at ``D = 0.04`` m paired:
 50–64 clumped pairs against 6–26).
-Measured (prototype, one thread): the deep exchange under the lid at 40 rows (D = 0.12 m,
-Δρ/ρ0 = 0.1) head −0.6 % and the fronts alike (0.96; without: +20.5 %, 0.68), the issue's
-D = 0.09 m, Δρ/ρ0 = 0.05 at 30 rows −8.5 %, 1.01 (without: +49.3 %, 0.33), both without pairs or
-volume drift; the disordered two-layer tank at rest the same as without. This effect's own
-version on the first case: −0.4 %, 0.96, no clumped pair, volume within 0.11 %. A free surface
-keeps the plain correction: there ``p_h`` does not vanish where the surface is not level.
+Measured (one thread, ``gravity_current`` under its lid): the deep exchange at 40 rows
+(D = 0.12 m, Δρ/ρ0 = 0.1) head −0.5 % and the fronts alike (light front 0.95 of the head; without
+the reference: +20.5 %, 0.68), the weakly stratified D = 0.09 m, Δρ/ρ0 = 0.05 at 30 rows −2.4 %,
+0.94 (without: +49.3 %, 0.33), each with at most two clumped pairs and the volume within 0.13 %;
+the problem's 0.34 m tank at 20 rows, nine depths and density ratios, −9.9 to +1.0 % (without:
+−9.6 to +9.2 %, the light front 0.37–0.83 of the head). A free surface keeps the plain
+correction: there ``p_h`` does not vanish where the surface is not level.
 
 **Measured** (1 m × 0.3 m tank at rest, ``Δx = 0.02`` m, ``α = 0.02``, ``δ = 0.1``, local
 shifting, 2 s): largest speed 0.03 % of :math:`\sqrt{gH}` (DNI: 3.7 %, growing), pressure RMS
@@ -418,7 +419,7 @@ class LinearConsistentPressure(Effect):
     (module docstring): ``f_i += −a_i e_i − (D_i + w_i I) g_i + b_i`` at the fluid nodes with a
     Shepard sum of at least ``c_min``; ``surface`` is the Shepard sum below which a particle is a
     surface candidate (confirmed by the normal-cone scan). Part of the recommended set.
-    ``hydrostatic_reference`` (off by default): in a closed tank, the fixed hydrostatic field,
+    ``hydrostatic_reference`` (on by default): in a closed tank, the fixed hydrostatic field,
     whose smallest residual is ``reference_background`` times the pressure's range, integrated exactly at the
     nodes that fall back (module docstring); fixed at the first evaluation without a free-surface
     face, kept in checkpoints and reported in the summary."""

@@ -48,8 +48,8 @@ class StabilisationSet:
     filter every this many steps (0: none), ``consistent_integration`` the constant-only VCI,
     ``linear_consistency`` the pressure's linear fit integrated exactly, ``hydrostatic_reference``
     with it, in a closed tank, a fixed hydrostatic field integrated exactly at the nodes that fall
-    back (:class:`~mlsgalerkin.fluid.linear_consistency.LinearConsistentPressure`; off until every
-    closed-tank table has been rerun with it), ``volume_consistency``
+    back (:class:`~mlsgalerkin.fluid.linear_consistency.LinearConsistentPressure`; on since
+    2026-12-05), ``volume_consistency``
     the rate ε at which the density relaxes towards the particles' packing where the fluid has a
     free surface (–; 0: off; :class:`~mlsgalerkin.fluid.volume_consistency.VolumeConsistency`),
     ``loose_band`` its loose side: past this volume error of the whole fluid (geometric volume over
