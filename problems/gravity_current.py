@@ -25,7 +25,8 @@ hydrostatic densities (``hydrostatic_density(..., compressible=True)``). The sim
 ``length`` and ``depth`` rounded to whole spacings (:func:`tank`), so the fluid fills it.
 
 Stabilisation: the recommended set (``mlsgalerkin.fluid.RECOMMENDED``: δ-SPH density diffusion
-within each phase, local shifting, the pressure's linear fit integrated exactly) except a lower
+within each phase, local shifting, the pressure's linear fit integrated exactly, with a fixed
+hydrostatic reference under the lid where the fit falls back) except a lower
 Monaghan ``α = 0.01``, plus the tank's penalty surface. The head is slow: its numerical Reynolds
 number ``v_h D/ν`` with ``ν = α h c0/8`` is about 170 at the recommended ``α = 0.02`` at 20 rows
 (reported in ``summary.json``), and there the head runs 8–10 % slow where ``α = 0.01`` gives
@@ -38,59 +39,53 @@ Without it the collocated continuity equation lost about 1 % of the volume per s
 lid, the lid's pressure level ran out in about 0.8 s, and the top row went into tension and
 clumped (``lid_clumping.md``; ``docs/theory/stabilisation.md`` §9).
 
-Measured (``verification/results/fluid_core/gravity.md``, rerun 2026-12-04 at one numba thread a
-run; the 3 × 3 matrix of ``D`` = 0.04, 0.06, 0.12 m and ``Δρ/ρ0`` = 0.1, 0.5, 1): every run
-completes; within 10 % of the formula are 9 of 9 in the tank scaled with the depth at 20 rows
-(−9.2 to +3.6 %), **9 of 9 in this 0.34 m tank at the default spacing, 20 rows per depth**
-(−9.6 to +9.2 %; three within a point of the band's edge, where round-off alone moves a head by
-about ±1.5 %) and 5 of 9 at a fixed ``Δx = 3`` mm (the default before 2026-12-04), which is 13 rows
-at ``D = 0.04`` m (−17.6, −15.8 and −12.5 %) and 40 at 0.12 m (+20.5 % at ``Δρ/ρ0 = 0.1``). In
-those nine default runs the light front runs at 0.37–0.83 of the heavy head's speed (1 in a
-Boussinesq exchange under a lid): the head meets the formula while the exchange is lopsided
-(below). The issue's deep weakly stratified case
-(``D = 0.09`` m, ``Δρ/ρ0 = 0.05``) runs +7.0 % at the default spacing (20 rows) and **+49.3 % at
-3 mm** (30 rows; Froude number 0.60, above Benjamin's energy-conserving 0.5), the light front at
-0.35 and 0.33 of the head's speed: the lopsided exchange below, which grows with the resolution
-in weakly stratified tanks under the lid. The default spacing is where the matrix holds, not a
-converged answer for weak stratifications. At the recommended set's ``α = 0.02``: 7 of 9 in the scaled
-tank (−10.0 and −10.3 % at ``Δρ/ρ0`` = 1 and 0.5). (The table of 2026-12-02, run on two threads
-before the runs became independent of the thread count, read 9 / 8 / 5 of 9; single heads moved
-by up to 7 points, D = 0.06 m, ``Δρ/ρ0 = 0.1`` from +0.9 to −6.1 %, the chaotic exchange's
-sensitivity to round-off.) That deep weakly stratified case does not converge under the lid, and its
-exchange is lopsided at every resolution (``verification/results/fluid_core/gravity_lid.md``,
-``python verification/fluid_core.py --section gravity_lid``; ``analyse`` reports both fronts:
-``light_froude_number`` and ``front_speed_ratio``, the light front's speed over the heavy head's,
-1 in a Boussinesq exchange under a lid). At 20, 40 and 60 rows the head runs −8.4, +20.5 and
-+31.6 % and the light front at 0.83, 0.68 and 0.61 of its speed (table regenerated 2026-12-03,
-one numba thread per run; the round-off of the parallel sums alone moves the head at 20 rows by
-about ±1.5 %: −6.0 % on two threads). One setting changed at a time at 40 rows: free-slip walls
-0.91 (+22.4 %), no shifting 0.72 (+6.2 %), a free surface 1.07 (+3.3 %); the penalty surface
-(0.61 without), direct nodal integration (0.75, +7.0 %), the lid's pressure level (0.74 at 0.2
-``ρ_heavy g D``), ``α = 0.02`` (0.64) and ``δ = 0.05`` (0.65) do not remove it; without density
-diffusion the run completes at 40 rows (0.77, +7.7 %, volume error 1.7 %) and diverges at 60
-rows (0.74 s). At ``Δρ/ρ0 = 0.03`` the ratio is 0.32 under the lid (+51.2 %) and 0.57 with a free
-surface (+43.6 %). The mechanism
+Measured (``verification/results/fluid_core/gravity.md``, rerun 2026-12-05 with the hydrostatic
+reference at one numba thread a run; the 3 × 3 matrix of ``D`` = 0.04, 0.06, 0.12 m and ``Δρ/ρ0`` =
+0.1, 0.5, 1): every run completes; within 10 % of the formula are **9 of 9 in this 0.34 m tank at
+the default spacing, 20 rows per depth** (−9.9 to +1.0 %), 8 of 9 in the tank scaled with the depth
+at 20 rows (−10.6 to +1.0 %; −10.6 % at ``D = 0.04`` m, ``Δρ/ρ0 = 0.1``) and 6 of 9 at a fixed ``Δx
+= 3`` mm (the default before 2026-12-04), which is 13 rows at ``D = 0.04`` m (−15.3, −10.6 and
+−12.3 %; the heads converge from below) and 40 at 0.12 m (−0.5, +9.5 and +9.3 %). Both fronts
+(``analyse`` reports ``light_froude_number`` and ``front_speed_ratio``, the light front's speed
+over the heavy head's): the Boussinesq exchanges (``Δρ/ρ0 = 0.1``) run alike, the light front at
+0.93–0.98 of the head; the strong stratifications are not Boussinesq, and their light front runs at
+0.69–0.87 of the head. The Boussinesq heads converge from below: the deep exchange ``D = 0.12`` m,
+``Δρ/ρ0 = 0.1`` runs −6.9, −0.5 and +2.8 % at 20, 40 and 60 rows with the fronts at 0.98, 0.95 and
+0.98 (``verification/results/fluid_core/gravity_lid.md``, ``python verification/fluid_core.py
+--section gravity_lid``): at the default 20 rows the symmetric exchange runs at Froude number
+0.36–0.37 in the weak stratifications, 7–11 % under the formula. The issue's deep weakly stratified
+case (``D = 0.09`` m, ``Δρ/ρ0 = 0.05``) runs −8.9 % at the default spacing (20 rows) and −2.4 % at
+3 mm (30 rows), the light front at 0.97 and 0.94 of the head's speed. Pairs: at most 7 clumped
+pairs in every run of the matrix but ``D = 0.04`` m, ``Δρ/ρ0 = 1`` (26, late, on the no-slip floor
+where light particles are left under the heavy current).
+
+Before 2026-12-05 (``--set hydrostatic_reference=false`` runs it): the head met the formula in both
+tanks (9 of 9, −9.6 to +9.2 %) while the exchange was lopsided, the light front at 0.37–0.83 of the
+head, and weakly stratified exchanges ran faster with resolution (``D = 0.12`` m, ``Δρ/ρ0 = 0.1``:
+−8.4, +20.5 and +31.6 % at 20, 40 and 60 rows, the light front at 0.83, 0.68 and 0.61 of the head;
+``D = 0.09`` m, ``Δρ/ρ0 = 0.05``: +7.0 and +49.3 % at 20 and 30 rows). The mechanism
 (``docs/theory/stabilisation.md`` §7): the fronts' pressure leaves the linear consistency's
 linearity limit first, those nodes fall back to direct nodal integration, whose error on the
-disordered lattice of the mixing zone scales with the pressure itself (so with ``g``, not
-``g′``), and its noise trips their neighbours until no node is corrected (0.8 s at 20 rows).
-With the correction kept at every node the fronts run alike (0.97 at 20 rows; 0.98 and +1.8 %
-at 40 rows) but the geometric volume drifts (2.7 % at 40 rows) and an impact gains energy: the
-cure is a nodal integration that is linearly exact and conserves energy at once, not yet built
-(a prototype runs the fronts alike, 0.99 at 20 rows with the head at −7.3 %, but leaves the
-pairing modes of nodal integration unresisted: ``docs/theory/stabilisation.md`` §7).
+disordered lattice of the mixing zone scales with the pressure itself (so with ``g``, not ``g′``),
+and its noise trips their neighbours until no node is corrected. The fixed hydrostatic reference
+integrates the hydrostatic part exactly at those nodes, so what falls back scales with ``g′``. The
+rows of ``gravity_lid.md`` that change one setting at a time at 40 rows were measured before it
+(their ``run_commit`` says so): free-slip walls, no shifting or a free surface moved the light
+front towards the head; the penalty surface, direct nodal integration, the lid's pressure level,
+``α = 0.02`` and ``δ = 0.05`` did not.
+
 With a free surface at ``Δρ/ρ0 = 0.1`` the two fronts run alike (1.03 and 1.00 at 40 and 60 rows)
-and approach the energy-conserving 0.5 (Froude numbers 0.42 and 0.48: +4.0 and +20.3 % against
-the formula's 0.4): Shin, Dalziel & Linden (2004) measure lock-exchange currents a few per cent
-under 0.5 at high Reynolds numbers (here ``v_h D/ν ≈ 2·10⁴``), so as the numerical viscosity
-falls the head leaves the 10 % band around Rottman & Simpson's 0.4 from above, in either
-configuration. The default case runs +3.6 % (``D = 0.06`` m, ``Δρ/ρ0 = 0.5`` at 3 mm = 20 rows).
-The largest geometric-volume error is 0.1–1.2 % under the lid. With a free surface the deep case
-keeps its volume through the recommended set's volume consistency: 0.71 and 0.68 % at 40 and 60
-rows, 0.77 % at ``Δρ/ρ0 = 0.03`` (3.3, 4.8 and 6.9 % with ``--set volume_consistency=0``;
-``gravity_lid.md``, ``docs/theory/stabilisation.md`` §10); the run warns past 1 %. Pressure noise under the lid: the probes
-``top_pressure_spread`` (max − min of the top row's pressure) and ``top_pressure_mean``, reported
-by ``analyse`` after 0.2 s.
+and approach the energy-conserving 0.5 (Froude numbers 0.42 and 0.48: +4.0 and +20.3 % against the
+formula's 0.4): Shin, Dalziel & Linden (2004) measure lock-exchange currents a few per cent under
+0.5 at high Reynolds numbers (here ``v_h D/ν ≈ 2·10⁴``), so as the numerical viscosity falls the
+head leaves the 10 % band around Rottman & Simpson's 0.4 from above, in either configuration. The
+default case runs −1.7 % (``D = 0.06`` m, ``Δρ/ρ0 = 0.5`` at 3 mm = 20 rows; +3.6 % before the
+hydrostatic reference). The largest geometric-volume error is 0.1–1.2 % under the lid. With a free
+surface the deep case keeps its volume through the recommended set's volume consistency: 0.71 and
+0.68 % at 40 and 60 rows, 0.77 % at ``Δρ/ρ0 = 0.03`` (3.3, 4.8 and 6.9 % with ``--set
+volume_consistency=0``; ``gravity_lid.md``, ``docs/theory/stabilisation.md`` §10); the run warns
+past 1 %. Pressure noise under the lid: the probes ``top_pressure_spread`` (max − min of the top
+row's pressure) and ``top_pressure_mean``, reported by ``analyse`` after 0.2 s.
 
 Why a lid: the formula comes from laboratory currents with ``Δρ/ρ0`` of a few per cent, whose
 free surface barely moves. At ``Δρ/ρ0 = 0.5`` an open surface does move: measured with

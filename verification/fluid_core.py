@@ -100,7 +100,8 @@ def gravity_cases(quick: bool) -> list[tuple[str, dict]]:
 
 def gravity_lid_cases(quick: bool) -> list[tuple[str, dict]]:
     """The deep weakly stratified lock exchange (``D = 0.12`` m, ``Δρ/ρ0 = 0.1``, the problem's
-    0.34 m tank) that goes lopsided under the lid: the problem's defaults at 20, 40 and 60 rows,
+    0.34 m tank) that went lopsided under the lid before the hydrostatic reference (2026-12-05):
+    the problem's defaults at 20, 40 and 60 rows,
     then one setting changed at a time at 40 rows (3 mm, the default spacing before 2026-12-04),
     the free surface instead of the lid, and the weaker stratification ``Δρ/ρ0 = 0.03``. Every
     run lasts until the heavy head has crossed its fit window (time scaled with
@@ -434,8 +435,10 @@ no divergence. Each depth D and density ratio in the tank whose length scales wi
 (0.34 D/0.06 m) at 20 rows per depth, and in the problem's own 0.34 m tank at the problem's default
 spacing (20 rows per depth since 2026-12-04: dx = D/20) and at dx = 3 mm (the default before; 13
 rows at D = 0.04 m, 40 at 0.12 m); every other setting is the problem's default (delta =
-0.1, local shifting, linear consistency as in the recommended set, alpha = 0.01, no-slip walls,
-the lid with ClosedVolume); the rows marked alpha=0.02 run the recommended set's alpha. The last
+0.1, local shifting, linear consistency as in the recommended set, with its hydrostatic
+reference under the lid since 2026-12-05, alpha = 0.01, no-slip walls, the lid with
+ClosedVolume); the rows marked alpha=0.02 run the recommended set's alpha. A row whose
+run_commit is older than e989f6b ran without the hydrostatic reference (the exchange lopsided). The last
 rows are the issue's deep weakly stratified case (D = 0.09 m, drho/rho0 = 0.05). The
 simulated tank is the given one rounded to whole particle spacings. Both fronts: front_speed_ratio is
 the light front's speed over the heavy head's (1 in a Boussinesq exchange under a lid; blank where
@@ -461,7 +464,10 @@ time window: froude_number and light_froude_number are both fronts' speeds over 
 drho/rho0); front_speed_ratio = light / heavy. A Boussinesq exchange under a lid runs both fronts
 alike (ratio 1, Froude number about 0.5 at high Reynolds number, a few per cent less with
 mixing: Shin, Dalziel & Linden 2004). Every setting is the problem's default (the recommended
-set with alpha = 0.01, no-slip walls, the lid with ClosedVolume) except the one named.
+set with alpha = 0.01, no-slip walls, the lid with ClosedVolume) except the one named. Since
+2026-12-05 the set's linear consistency keeps a fixed hydrostatic reference under the lid
+(docs/theory/stabilisation.md section 7); a row whose run_commit is older ran without it, when
+the exchange under the lid was lopsided (the light front at 0.6-0.8 of the head).
 
 ![both fronts per case](gravity_lid.png)""",
                 ["case", "status", "fluid_particles", "steps", "t_reached_s", "head_speed_m_s", "relative_error",
