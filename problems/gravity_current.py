@@ -56,8 +56,9 @@ over the heavy head's): the Boussinesq exchanges (``Δρ/ρ0 = 0.1``) run alike,
 0.36–0.37 in the weak stratifications, 7–11 % under the formula. The issue's deep weakly stratified
 case (``D = 0.09`` m, ``Δρ/ρ0 = 0.05``) runs −8.9 % at the default spacing (20 rows) and −2.4 % at
 3 mm (30 rows), the light front at 0.97 and 0.94 of the head's speed. Pairs: at most 7 clumped
-pairs in every run of the matrix but ``D = 0.04`` m, ``Δρ/ρ0 = 1`` (26, late, on the no-slip floor
-where light particles are left under the heavy current).
+pairs in the 0.34 m tank at the default spacing but at ``D = 0.04`` m, ``Δρ/ρ0 = 1`` (26, late, on
+the no-slip floor where light particles are left under the heavy current); at ``Δρ/ρ0 = 1`` the
+scaled tank and 3 mm rows pair more too (12–23; before 4–9).
 
 Before 2026-12-05 (``--set hydrostatic_reference=false`` runs it): the head met the formula in both
 tanks (9 of 9, −9.6 to +9.2 %) while the exchange was lopsided, the light front at 0.37–0.83 of the
