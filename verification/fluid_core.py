@@ -466,8 +466,9 @@ alike (ratio 1, Froude number about 0.5 at high Reynolds number, a few per cent 
 mixing: Shin, Dalziel & Linden 2004). Every setting is the problem's default (the recommended
 set with alpha = 0.01, no-slip walls, the lid with ClosedVolume) except the one named. Since
 2026-12-05 the set's linear consistency keeps a fixed hydrostatic reference under the lid
-(docs/theory/stabilisation.md section 7); a row whose run_commit is older ran without it, when
-the exchange under the lid was lopsided (the light front at 0.6-0.8 of the head).
+(docs/theory/stabilisation.md section 7); a lid row whose run_commit is older, or blank (kept from
+the table of 2026-12-03), ran without it, when the exchange under the lid was lopsided (the light
+front at 0.6-0.8 of the head). The free-surface rows are untouched by it.
 
 ![both fronts per case](gravity_lid.png)""",
                 ["case", "status", "fluid_particles", "steps", "t_reached_s", "head_speed_m_s", "relative_error",
