@@ -86,8 +86,8 @@ the pairing modes of nodal integration unresisted.
 
 **A fixed hydrostatic reference in a closed tank** (``hydrostatic_reference=True``, the default
 since 2026-12-05 and part of the recommended set; ``docs/theory/stabilisation.md`` §7, the eighth
-candidate). Where a node falls back to DNI, DNI's error scales with the whole pressure, most of which under a lid is
-hydrostatic. In an evaluation without a free-surface face and with gravity, a field of position
+candidate). Where a node falls back to DNI, DNI's error scales with the whole pressure, most of
+which under a lid is hydrostatic. In an evaluation without a free-surface face and with gravity, a field of position
 fixed at the first such evaluation,
 
 .. math:: p_h(\mathbf x) = a + \rho_\text{ref}\,\mathbf g\cdot(\mathbf x - \bar{\mathbf x}),
@@ -420,8 +420,8 @@ class LinearConsistentPressure(Effect):
     Shepard sum of at least ``c_min``; ``surface`` is the Shepard sum below which a particle is a
     surface candidate (confirmed by the normal-cone scan). Part of the recommended set.
     ``hydrostatic_reference`` (on by default): in a closed tank, the fixed hydrostatic field,
-    whose smallest residual is ``reference_background`` times the pressure's range, integrated exactly at the
-    nodes that fall back (module docstring); fixed at the first evaluation without a free-surface
+    whose smallest residual is ``reference_background`` times the pressure's range, integrated
+    exactly at the nodes that fall back (module docstring); fixed at the first evaluation without a free-surface
     face, kept in checkpoints and reported in the summary."""
 
     name = "linear_consistent_pressure"
