@@ -421,8 +421,8 @@ class LinearConsistentPressure(Effect):
     surface candidate (confirmed by the normal-cone scan). Part of the recommended set.
     ``hydrostatic_reference`` (on by default): in a closed tank, the fixed hydrostatic field,
     whose smallest residual is ``reference_background`` times the pressure's range, integrated
-    exactly at the nodes that fall back (module docstring); fixed at the first evaluation without a free-surface
-    face, kept in checkpoints and reported in the summary."""
+    exactly at the nodes that fall back (module docstring); fixed at the first evaluation without
+    a free-surface face, kept in checkpoints and reported in the summary."""
 
     name = "linear_consistent_pressure"
     stabilising = True
