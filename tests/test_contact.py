@@ -609,6 +609,34 @@ def test_penalty_kernel_matches_the_reference_in_a_crowded_tank(dim, rng):
     np.testing.assert_array_equal(again.slave_forces, got.slave_forces)
 
 
+
+def test_the_narrow_phase_compiles_once_for_every_flavour_of_input(rng):
+    """Scalar or per-node masses, read-only or writable arrays (what ``np.broadcast_to`` and a
+    memory-mapped file give), given or computed pairs, rigid or deformable master, 2D or 3D: one
+    compiled narrow phase serves them all (each new specialisation costs about a minute)."""
+    from mlsgalerkin.contact import penalty
+
+    def read_only(a):
+        a = np.array(a)
+        a.flags.writeable = False
+        return a
+
+    for dim in (2, 3):
+        surf = random_surface(rng, dim)
+        x = slaves_near(rng, surf, 40, 0.1)
+        n, m = len(x), surf.n_nodes
+        v = rng.normal(0, 1, (n, dim))
+        kw = dict(dt_ref=1e-3, thickness=0.05, reach=0.1)
+        pairs = candidate_pairs(x, surf.nodes, surf.facets, search_margin(0.05, 0.1))
+        penalty_forces(x, v, 0.1, surf.nodes, None, None, surf.facets, **kw)
+        penalty_forces(x, v, rng.uniform(0.1, 1, n), surf.nodes, np.zeros(dim), 2.0, surf.facets, **kw)
+        penalty_forces(read_only(x), read_only(v), read_only(np.full(n, 0.1)), read_only(surf.nodes),
+                       read_only(np.zeros((m, dim))), read_only(np.ones(m)), read_only(surf.facets), **kw,
+                       centre=read_only(np.ones(dim)), candidates=tuple(read_only(p) for p in pairs))
+    assert len(penalty._contacts.signatures) == 1, penalty._contacts.signatures
+    assert len(penalty._gather.signatures) == 1, penalty._gather.signatures
+
+
 # ------------------------------------------------------------------ the two-body interaction
 class PointSolver(Solver):
     """A stand-in solver holding one body's nodes (and segments) at rest, recording forces."""

@@ -63,6 +63,21 @@ def _reached(args) -> np.ndarray:
     return np.array(out)
 
 
+def test_wall_extrapolation_compiles_once_for_a_shared_or_per_wall_gravity(rng):
+    """Gravity given once ``(d,)`` (broadcast to a read-only view) or per wall particle
+    ``(n_w, d)``: the one compiled kernel serves both."""
+    from mlsgalerkin.fluid import walls as wall_module
+
+    x, n_f, n, h, walls, table = _tank_cloud(rng)
+    args = _wall_args(rng, x, n_f, n, h, walls, table, g=(0.0, -9.81))
+    shared = extrapolate_wall_state(**args, slip="no_slip")
+    args["g_minus_a"] = np.tile(args["g_minus_a"], (n - n_f, 1))
+    per_wall = extrapolate_wall_state(**args, slip="no_slip")
+    for a, b in zip(shared, per_wall, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert len(wall_module._extrapolate.signatures) == 1, wall_module._extrapolate.signatures
+
+
 @pytest.mark.parametrize("slip", sorted(SLIP_MODES))
 def test_wall_extrapolation_matches_reference(rng, slip):
     x, n_f, n, h, walls, table = _tank_cloud(rng)

@@ -60,18 +60,44 @@ def test_wheel_holds_problems_and_reference_data(wheel):
     assert not any(n.startswith("problems/") for n in names)
 
 
-def test_a_problem_runs_end_to_end_from_a_non_editable_install(wheel, tmp_path):
-    """Installed from the wheel (not editable), run from a directory far from the repository:
-    the dam break runs and its analysis reads the shipped Martin & Moyce data."""
-    target = tmp_path / "site"
+@pytest.fixture(scope="module")
+def installed(wheel, tmp_path_factory) -> tuple[Path, dict]:
+    """The wheel installed (not editable) into a folder far from the repository, and the
+    environment that imports the package from there."""
+    target = tmp_path_factory.mktemp("site")
     done = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--quiet", "--target",
                            str(target), str(wheel)], capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-2000:]
-    env = dict(os.environ, PYTHONPATH=str(target), NUMBA_NUM_THREADS="1")
+    return target, dict(os.environ, PYTHONPATH=str(target), NUMBA_NUM_THREADS="1")
+
+
+def test_a_non_editable_install_finds_its_problems_and_data(installed, tmp_path):
+    """Run from a directory far from the repository, the installed package (not this checkout)
+    lists and describes the shipped problems, and the dam break's analysis reads the shipped
+    Martin & Moyce data. The whole run from the wheel is the slow test below (the installed copy
+    compiles every numba kernel afresh: about two minutes)."""
+    target, env = installed
     where = subprocess.run([sys.executable, "-c", "import mlsgalerkin, mlsgalerkin.problems as p; "
                             "print(mlsgalerkin.__file__); print(p.__file__)"], capture_output=True, text=True,
                            cwd=tmp_path, env=env, timeout=120)
     assert where.returncode == 0 and all(line.startswith(str(target)) for line in where.stdout.split()), where.stdout
+    described = subprocess.run([sys.executable, "-m", "mlsgalerkin", "problems", "dam_break"], capture_output=True,
+                               text=True, cwd=tmp_path, env=env, timeout=120)
+    assert described.returncode == 0, described.stderr[-3000:]
+    assert "Martin" in described.stdout
+    data = subprocess.run([sys.executable, "-c", "from mlsgalerkin.problems.dam_break import load_martin_moyce; "
+                           "d = load_martin_moyce(); print(len(d), sum(len(v) for v in d.values()))"],
+                          capture_output=True, text=True, cwd=tmp_path, env=env, timeout=120)
+    assert data.returncode == 0, data.stderr[-3000:]
+    series, points = map(int, data.stdout.split())
+    assert series >= 1 and points > 10
+
+
+@pytest.mark.slow
+def test_a_problem_runs_end_to_end_from_a_non_editable_install(installed, tmp_path):
+    """Installed from the wheel (not editable), run from a directory far from the repository:
+    the dam break runs and its analysis reads the shipped Martin & Moyce data."""
+    _, env = installed
     run = subprocess.run([sys.executable, "-m", "mlsgalerkin", "run", "dam_break", "--dx", "0.0095", "--t-end", "0.08",
                           "--out", "db", "--no-progress", "--no-gif"], capture_output=True, text=True, cwd=tmp_path,
                          env=env, timeout=900)

@@ -90,6 +90,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from mlsgalerkin.contact.geometry import INTERIOR, closest_on_facet, facet_normals, facet_normals_reference
 from mlsgalerkin.contact.search import candidate_pairs, candidate_pairs_reference
+from mlsgalerkin.kernel_arrays import kernel_array
 
 __all__ = [
     "DEFAULT_ALPHA", "DEFAULT_DAMPING", "DEFAULT_FEATURE_ANGLE", "STABILITY_FACTOR", "PenaltyResult",
@@ -441,19 +442,17 @@ def _gather(pf, pw, pn, pg, pk, pfn, xm, facets, centre, master_f, total, moment
 
 # ---------------------------------------------------------------------------------- API
 def _prepare(slave_x, slave_v, slave_m, master_x, master_v, master_m, facets):
-    xs = np.ascontiguousarray(slave_x, dtype=np.float64)
+    xs = kernel_array(slave_x, np.float64)
     if xs.ndim != 2 or xs.shape[1] not in (2, 3):
         raise ValueError(f"penalty_forces: slave positions must be an (n, 2) or (n, 3) array, got shape {xs.shape}")
     n, d = xs.shape
-    vs = np.ascontiguousarray(slave_v, dtype=np.float64)
-    ms = np.ascontiguousarray(np.broadcast_to(np.asarray(slave_m, dtype=np.float64), (n,)))
-    xm = np.ascontiguousarray(master_x, dtype=np.float64)
-    vm = np.zeros_like(xm) if master_v is None else np.ascontiguousarray(
-        np.broadcast_to(np.asarray(master_v, dtype=np.float64), xm.shape))
+    vs = kernel_array(slave_v, np.float64)
+    ms = kernel_array(slave_m, np.float64, (n,))
+    xm = kernel_array(master_x, np.float64)
+    vm = np.zeros_like(xm) if master_v is None else kernel_array(master_v, np.float64, xm.shape)
     rigid = master_m is None
-    mm = np.zeros(xm.shape[0]) if rigid else np.ascontiguousarray(
-        np.broadcast_to(np.asarray(master_m, dtype=np.float64), (xm.shape[0],)))
-    f = np.ascontiguousarray(facets, dtype=np.int64)
+    mm = np.zeros(xm.shape[0]) if rigid else kernel_array(master_m, np.float64, (xm.shape[0],))
+    f = kernel_array(facets, np.int64)
     if vs.shape != (n, d) or xm.ndim != 2 or xm.shape[1] != d or f.ndim != 2 or f.shape[1] != d:
         raise ValueError(f"penalty_forces: slave positions {xs.shape}, velocities {vs.shape}, master nodes "
                          f"{xm.shape} and facets {f.shape} must share one dimension d (2 or 3): (n, d), (n, d), "
@@ -540,7 +539,7 @@ def penalty_forces(
         np.cumsum(counts[rows], out=sub_ptr[1:])
         xs_t, vs_t, ms_t = xs[rows], vs[rows], ms[rows]
     else:
-        sub_ptr, xs_t, vs_t, ms_t = np.ascontiguousarray(indptr, dtype=np.int64), xs, vs, ms
+        sub_ptr, xs_t, vs_t, ms_t = kernel_array(indptr, np.int64), xs, vs, ms
     normals = facet_normals(xm, f)
     maxc = d
     pf = np.empty((t, maxc), dtype=np.int64)
@@ -548,7 +547,7 @@ def penalty_forces(
     pg, pk, pfn = np.empty((t, maxc)), np.empty((t, maxc)), np.empty((t, maxc))
     gap_t, force_t = np.empty(t), np.empty((t, d))
     cos_feature = math.cos(math.radians(feature_angle))
-    _contacts(xs_t, vs_t, ms_t, xm, vm, mm, rigid, f, normals, sub_ptr, np.ascontiguousarray(indices, dtype=np.int64),
+    _contacts(xs_t, vs_t, ms_t, xm, vm, mm, rigid, f, normals, sub_ptr, kernel_array(indices, np.int64),
               float(thickness), float(reach), cos_feature, alpha / dt_ref**2, float(damping), pf, pw, pn, pg, pk, pfn,
               gap_t, force_t)
     master_f = np.zeros_like(xm)
@@ -556,7 +555,7 @@ def penalty_forces(
     moment = np.zeros(1 if d == 2 else 3)
     slave_k = np.zeros(t)
     node_k = np.zeros(xm.shape[0])
-    c = np.zeros(d) if centre is None else np.asarray(centre, dtype=float)
+    c = np.zeros(d) if centre is None else kernel_array(centre, np.float64)
     most = int(np.count_nonzero(pf >= 0))
     out_slave, out_facet = np.empty(most, dtype=np.int64), np.empty(most, dtype=np.int64)
     out_w, out_n, out_g, out_f = np.empty((most, d)), np.empty((most, d)), np.empty(most), np.empty(most)

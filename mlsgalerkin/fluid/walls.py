@@ -62,6 +62,7 @@ from numpy.typing import NDArray
 from mlsgalerkin.fluid.bodies import WallBody
 from mlsgalerkin.fluid.effect import Effect, EffectContext
 from mlsgalerkin.fluid.state import FluidState
+from mlsgalerkin.kernel_arrays import kernel_array
 from mlsgalerkin.kernels import get_kernel, kernel_f_df
 from mlsgalerkin.pairs import pair_offset
 from mlsgalerkin.periodic import as_period, minimum_image
@@ -162,7 +163,7 @@ def extrapolate_wall_state(
     p_out = np.empty(n_w)
     rho_out = np.empty(n_w)
     v_out = np.empty((n_w, dim))
-    g_minus_a = np.ascontiguousarray(np.broadcast_to(np.asarray(g_minus_a, dtype=float), (n_w, dim)))
+    g_minus_a = kernel_array(g_minus_a, np.float64, (n_w, dim))
     _extrapolate(
         wall_ids, indptr, indices, x, v, rho, p, h, is_fluid, kernel.kernel_id, kernel.support,
         dim, g_minus_a, wall_velocity, normals, SLIP_MODES[slip], rho_ref,
