@@ -129,18 +129,13 @@ def kernel_rows(sizes: Sequence[int], dims: Sequence[int], reference: bool, repe
 
 def dam_break(ratio: int, penalty: bool):
     """The dam-break simulation of bench_fluid_step at ``a/dx = ratio``, with or without the
-    tank's penalty surface and ``PenaltyWalls``."""
-    from mlsgalerkin.fluid import PenaltyWalls, WallBody, wall_box
+    tank's penalty surface and ``PenaltyWalls`` (the problem's ``penalty_walls`` parameter; on by
+    default)."""
     from mlsgalerkin.problems.dam_break import Parameters, make_scene
     from mlsgalerkin.simulation import Simulation
 
-    p = Parameters(dx=Parameters().column_width / ratio)
+    p = Parameters(dx=Parameters().column_width / ratio, penalty_walls=penalty)
     scene = make_scene(p)
-    if penalty:
-        k = next(i for i, b in enumerate(scene.bodies) if isinstance(b, WallBody))
-        scene.bodies[k] = wall_box((0.0, 0.0), (p.tank_length_factor * p.column_width, 2.8 * p.column_width), p.dx,
-                                   layers=3, reference_density=p.rho, surface=True)
-        scene.schemes[0].effects.append(PenaltyWalls())
     sim = Simulation(scene)
     sim.start()
     for _ in range(WARMUP_STEPS):
