@@ -3,9 +3,10 @@
 numba compiles a kernel once per *type* of each argument, and an array's type holds its dtype,
 number of dimensions, layout and write flag. A read-only view (what :func:`numpy.broadcast_to`
 returns, a slice of a memory-mapped file, an array a user froze) is a different type from the
-writable array of the same shape, and a large parallel kernel compiles for about a minute. The
-public functions that hand arrays to a kernel pass them through :func:`kernel_array`, so every
-call reaches the one specialisation already compiled (or cached on disk).
+writable array of the same shape, and a large parallel kernel compiles for about a minute. A
+public function whose caller's arrays reach a kernel (``penalty_forces``,
+``extrapolate_wall_state``) passes them through :func:`kernel_array`, so every call reaches the
+one specialisation already compiled (or cached on disk).
 
 >>> import numpy as np
 >>> frozen = np.broadcast_to(np.ones(3), (4, 3))
@@ -34,4 +35,4 @@ def kernel_array(a: ArrayLike, dtype: DTypeLike, shape: tuple[int, ...] | None =
     out = np.asarray(a, dtype=dtype)
     if shape is not None and out.shape != tuple(shape):
         out = np.broadcast_to(out, shape)
-    return np.require(out, dtype=dtype, requirements=("C", "W"))
+    return np.require(out, requirements=("C", "W"))
